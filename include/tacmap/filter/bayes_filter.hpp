@@ -1,0 +1,243 @@
+// tacmap: `bayes_filter` — THE recursive Bayes filter of the paper's Table 1, over a grid.
+//
+//   control update:      bel_bar(x_t) = sum_{x_{t-1}} p(x_t | u_t, x_{t-1}) bel(x_{t-1})
+//   measurement update:  bel(x_t)     = eta p(z_t | x_t) bel_bar(x_t)
+//
+// The grid, the motion model and the measurement model are policies (configured values) that
+// act on the whole belief at once. The initial belief is uniform: the paper assumes no prior
+// knowledge of where the sensor is (Sec. III-A); `set_prior` takes a user prior instead.
+#pragma once
+
+#include "tacmap/grid/concept.hpp"
+#include "tacmap/image.hpp"
+#include "tacmap/measurement/concept.hpp"
+#include "tacmap/motion/concept.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <utility>
+
+namespace tacmap {
+
+/// Summary of a belief in the map frame (millimetres; radians for angles).
+template <int Dimension>
+struct state_estimate {
+  using vector_type = Eigen::Matrix<double, Dimension, 1>;
+  using matrix_type = Eigen::Matrix<double, Dimension, Dimension>;
+  Eigen::Index map_index = 0;        ///< index of the most probable state (MAP)
+  vector_type map_mm;                ///< the MAP state's coordinates
+  double map_probability = 0.0;      ///< its posterior probability
+  vector_type mean_mm;               ///< posterior mean
+  matrix_type covariance_mm2;        ///< posterior covariance
+  double entropy_nats = 0.0;         ///< -sum p log p: 0 when certain, log(N) when uniform
+};
+
+/// What one measurement update reports.
+struct update_report {
+  /// log of the normaliser eta^-1 = sum_x p(z | x) bel_bar(x), relative to the likelihood's
+  /// maximum: 0 when the prediction put all its mass on the best-matching states, very negative
+  /// when the measurement contradicts the prediction (a hint of a bad touch or bad odometry).
+  double log_evidence = 0.0;
+};
+
+/// The recursive Bayes filter over `Grid`, with the `Motion` and `Measurement` policies.
+/// The belief's precision is `Grid::scalar_type` (float or double).
+template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
+class bayes_filter {
+ public:
+  using grid_type = Grid;
+  using motion_type = Motion;
+  using measurement_model_type = Measurement;
+  using scalar_type = typename Grid::scalar_type;
+  using belief_type = belief_array<Grid>;
+  using control_type = typename Motion::control_type;
+  using measurement_type = typename Measurement::measurement_type;
+  using estimate_type = state_estimate<Grid::dimension>;
+
+  /// A filter with a uniform initial belief.
+  bayes_filter(Grid grid, Motion motion, Measurement measurement)
+      : grid_(std::move(grid)),
+        motion_(std::move(motion)),
+        measurement_(std::move(measurement)),
+        belief_(grid_.size()),
+        scratch_(grid_.size()),
+        log_likelihood_(grid_.size()) {
+    TACMAP_ASSERT(grid_.size() > 0 && grid_.size() % (grid_.rows() * grid_.cols()) == 0,
+                  "a state_grid's size must be a positive multiple of rows * cols");
+    reset();
+  }
+
+  /// Back to the uniform belief (no knowledge of where the sensor is).
+  void reset() { belief_.setConstant(scalar_type(1) / static_cast<scalar_type>(grid_.size())); }
+
+  /// Replaces the belief by a user prior: either a flat array of `size()` values or an image of
+  /// `rows() x cols()` (single-layer grids). Values must be finite and >= 0 with a positive
+  /// sum; they are normalised. Throws std::invalid_argument otherwise, belief unchanged.
+  template <class Derived>
+  void set_prior(const Eigen::DenseBase<Derived>& prior) {
+    const Eigen::Index n = grid_.size();
+    if (prior.rows() == n && prior.cols() == 1) {
+      scratch_ = prior.derived().template cast<scalar_type>();
+    } else if (prior.rows() == grid_.rows() && prior.cols() == grid_.cols() &&
+               n == grid_.rows() * grid_.cols()) {
+      Eigen::Map<image<scalar_type>>(scratch_.data(), grid_.rows(), grid_.cols()) =
+          prior.derived().template cast<scalar_type>();
+    } else {
+      detail::fail("bayes_filter::set_prior: prior is ", prior.rows(), " x ", prior.cols(),
+                   "; expected ", n, " x 1 (one value per state) or the belief image ",
+                   grid_.rows(), " x ", grid_.cols());
+    }
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!(std::isfinite(scratch_(i)) && scratch_(i) >= 0))
+        detail::fail("bayes_filter::set_prior: prior value ", scratch_(i), " at state ", i,
+                     "; expected finite probabilities >= 0");
+    const double total = static_cast<double>(scratch_.sum());
+    if (!(total > 0.0 && std::isfinite(total)))
+      detail::fail("bayes_filter::set_prior: the prior sums to ", total,
+                   "; expected a positive, finite total (it is normalised for you)");
+    scratch_ *= static_cast<scalar_type>(1.0 / total);
+    belief_.swap(scratch_);
+  }
+
+  /// Control update with odometry `u`. If the motion model throws (invalid odometry, all mass
+  /// off the grid) the exception propagates and the belief is unchanged.
+  prediction_report predict(const control_type& u) {
+    const prediction_report report = motion_.predict(grid_, belief_, scratch_, u);
+    // A user's motion model that breaks its contract must not poison the belief.
+    const double total = static_cast<double>(scratch_.sum());
+    if (!(std::isfinite(total) && total > 0.0) || scratch_.minCoeff() < 0)
+      detail::fail<std::logic_error>(
+          "bayes_filter::predict: the motion model returned a belief summing to ", total,
+          " (or with negative values); expected finite probabilities >= 0 with a positive sum. "
+          "The belief is unchanged; check the motion model");
+    scratch_ *= static_cast<scalar_type>(1.0 / total);
+    belief_.swap(scratch_);
+    return report;
+  }
+
+  /// Measurement update with measurement `z`, through the measurement model.
+  update_report update(const measurement_type& z) {
+    measurement_.log_likelihood(grid_, z, log_likelihood_);
+    if (log_likelihood_.size() != grid_.size()) {
+      const Eigen::Index got = log_likelihood_.size();
+      log_likelihood_.resize(grid_.size());
+      detail::fail("bayes_filter::update: the measurement model resized its output to ", got,
+                   " values; expected ", grid_.size(), " (one per state). The belief is unchanged");
+    }
+    return apply_log_likelihood(log_likelihood_, "the measurement model");
+  }
+
+  /// Measurement update with a log-likelihood computed elsewhere: a flat array of `size()`
+  /// values, or an image of `rows() x cols()` for single-layer grids.
+  template <class Derived>
+  update_report update_log_likelihood(const Eigen::DenseBase<Derived>& log_likelihood) {
+    const Eigen::Index n = grid_.size();
+    if (log_likelihood.rows() == n && log_likelihood.cols() == 1) {
+      log_likelihood_ = log_likelihood.derived().template cast<scalar_type>();
+    } else if (log_likelihood.rows() == grid_.rows() && log_likelihood.cols() == grid_.cols() &&
+               n == grid_.rows() * grid_.cols()) {
+      Eigen::Map<image<scalar_type>>(log_likelihood_.data(), grid_.rows(), grid_.cols()) =
+          log_likelihood.derived().template cast<scalar_type>();
+    } else {
+      detail::fail("bayes_filter::update_log_likelihood: log-likelihood is ",
+                   log_likelihood.rows(), " x ", log_likelihood.cols(), "; expected ", n,
+                   " x 1 (one value per state) or the belief image ", grid_.rows(), " x ",
+                   grid_.cols());
+    }
+    return apply_log_likelihood(log_likelihood_, "the given log-likelihood");
+  }
+
+  /// Predict with `u`, then update with `z` (one step of Table 1).
+  update_report step(const control_type& u, const measurement_type& z) {
+    predict(u);
+    return update(z);
+  }
+
+  /// The belief, one probability per state (sums to 1).
+  [[nodiscard]] const belief_type& belief() const { return belief_; }
+
+  /// One layer of the belief as a `rows() x cols()` image (row-major), e.g. for a heat map.
+  [[nodiscard]] Eigen::Map<const image<scalar_type>> belief_image(Eigen::Index layer = 0) const {
+    const Eigen::Index plane = grid_.rows() * grid_.cols();
+    TACMAP_ASSERT(layer >= 0 && (layer + 1) * plane <= grid_.size(), "belief layer out of range");
+    return {belief_.data() + layer * plane, grid_.rows(), grid_.cols()};
+  }
+
+  /// MAP state, mean, covariance and entropy of the belief, in the map frame (mm).
+  [[nodiscard]] estimate_type estimate() const {
+    estimate_type e;
+    Eigen::Index best = 0;
+    e.map_probability = static_cast<double>(belief_.maxCoeff(&best));
+    e.map_index = best;
+    e.map_mm = grid_.state_mm(best);
+    e.mean_mm.setZero();
+    e.covariance_mm2.setZero();
+    double entropy = 0.0;
+    // Accumulate around the MAP state: shifting the origin keeps the covariance accurate
+    // (no catastrophic cancellation between E[x^2] and E[x]^2 for far-from-origin maps).
+    for (Eigen::Index i = 0; i < grid_.size(); ++i) {
+      const double p = static_cast<double>(belief_(i));
+      if (p <= 0.0) continue;
+      const typename estimate_type::vector_type d = grid_.state_mm(i) - e.map_mm;
+      e.mean_mm += p * d;
+      e.covariance_mm2 += p * d * d.transpose();
+      entropy -= p * std::log(p);
+    }
+    e.covariance_mm2 -= e.mean_mm * e.mean_mm.transpose();
+    e.mean_mm += e.map_mm;
+    e.entropy_nats = entropy;
+    return e;
+  }
+
+  [[nodiscard]] const Grid& grid() const { return grid_; }
+  [[nodiscard]] const Motion& motion() const { return motion_; }
+  [[nodiscard]] const Measurement& measurement_model() const { return measurement_; }
+  [[nodiscard]] Motion& motion() { return motion_; }
+  [[nodiscard]] Measurement& measurement_model() { return measurement_; }
+
+ private:
+  // bel = eta * exp(ll - max ll) * bel_bar. Subtracting the maximum first means the best state's
+  // factor is exactly 1, so no likelihood underflows to an all-zero posterior by itself.
+  update_report apply_log_likelihood(const belief_type& ll, const char* source) {
+    if (!(ll == ll).all()) {
+      Eigen::Index at = 0;
+      while (at < ll.size() && ll(at) == ll(at)) ++at;
+      detail::fail<std::domain_error>("bayes_filter::update: ", source, " is NaN at state ", at,
+                                      "; expected finite log-likelihoods (or -infinity for "
+                                      "excluded states). The belief is unchanged");
+    }
+    const scalar_type top = ll.maxCoeff();
+    if (top == std::numeric_limits<scalar_type>::infinity())
+      detail::fail<std::domain_error>("bayes_filter::update: ", source,
+                                      " contains +infinity; expected finite log-likelihoods. "
+                                      "The belief is unchanged");
+    if (top == -std::numeric_limits<scalar_type>::infinity())
+      detail::fail<std::domain_error>("bayes_filter::update: ", source,
+                                      " is -infinity everywhere (it rules out every state); "
+                                      "expected at least one finite value. The belief is "
+                                      "unchanged");
+    // Below log(smallest normal) the factor is treated as exactly 0: Eigen's vectorised exp
+    // returns a denormal (not 0) for -infinity, and an excluded state must stay excluded.
+    const scalar_type floor = std::log(std::numeric_limits<scalar_type>::min());
+    scratch_ = belief_ * ((ll - top) < floor).select(scalar_type(0), (ll - top).exp());
+    const double total = static_cast<double>(scratch_.sum());
+    if (!(total > 0.0) || !std::isfinite(total))
+      detail::fail<std::domain_error>(
+          "bayes_filter::update: ", source, " gives zero probability to every state the belief ",
+          "still allows (posterior sum ", total, "); the measurement contradicts the prediction. "
+          "The belief is unchanged; call reset() to start again from a uniform belief");
+    scratch_ *= static_cast<scalar_type>(1.0 / total);
+    belief_.swap(scratch_);
+    return {std::log(total)};
+  }
+
+  Grid grid_;
+  Motion motion_;
+  Measurement measurement_;
+  belief_type belief_;
+  belief_type scratch_;
+  belief_type log_likelihood_;
+};
+
+}  // namespace tacmap

@@ -1,0 +1,249 @@
+// tacmap: `odometry_gaussian` — the paper's motion model (Sec. III-B).
+//
+// The arm (or haptic device) acts as an odometer: between two touches the sensor centre moved by
+// u_t = (dx, dy) in the map frame. The paper models p(x_t | x_{t-1}, u_t) as a Gaussian
+// N(x_t; x_hat_t, Sigma) centred on x_hat_t = x_{t-1} + u_t and "locally weighted" over the
+// nearest k states (k = 8 in the paper, i.e. the 3 x 3 neighbourhood).
+//
+// Whole-grid implementation: because the displacement is the same for every state, the
+// transition is a convolution. We split u_t (in pixels) into an integer part and a fraction
+// f in [0, 1)^2, shift by the integer part, apply the bilinear 2 x 2 kernel for f (so the
+// predicted mean equals the odometry exactly, not rounded to a pixel), and spread with the
+// Gaussian stencil over each state and its k nearest neighbours (weights normalised over the
+// stencil). Shift, bilinear and Gaussian are folded into one small composite stencil that is
+// applied as one block multiply-add per tap over the whole belief image.
+//
+// Covariance: per axis, the predicted spread is the truncated Gaussian's variance plus the
+// bilinear split's f(1 - f) px^2 (zero for whole-pixel motions). With the paper's k = 8 the
+// stencil is 3 x 3, so sigma larger than about one pixel is truncated; choose a larger k
+// (any count of lattice neighbours within a disc: 4, 8, 12, 20, 24, ...) for larger noise.
+//
+// Mass pushed off the grid: with `off_grid::renormalize` (default) it is dropped and the rest
+// renormalised — the filter then conditions on "the sensor is still over the map" — and the
+// fraction dropped is reported in `prediction_report::mass_lost`. With `off_grid::clamp` it is
+// piled onto the nearest edge state instead. If a motion would leave no mass on the grid the
+// model throws std::domain_error and the filter keeps its previous belief.
+#pragma once
+
+#include "tacmap/grid/concept.hpp"
+#include "tacmap/image.hpp"
+#include "tacmap/motion/concept.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace tacmap {
+
+/// Planar odometry: the sensor centre's displacement since the previous step, map frame, mm.
+struct odometry {
+  double dx_mm = 0.0;  ///< along the map's x axis (columns, to the right)
+  double dy_mm = 0.0;  ///< along the map's y axis (rows, downwards)
+};
+
+/// What happens to belief mass that a motion carries off the grid.
+enum class off_grid {
+  renormalize,  ///< drop it and renormalise the rest (reported as mass_lost)
+  clamp,        ///< pile it onto the nearest edge state
+};
+
+/// Configuration of `odometry_gaussian`. Defaults are the paper's k = 8 with sigma 1 mm.
+struct odometry_gaussian_params {
+  double sigma_mm = 1.0;               ///< standard deviation of the motion noise, per axis
+  int k = 8;                           ///< neighbours of each state the noise spreads over
+  off_grid boundary = off_grid::renormalize;
+};
+
+namespace detail {
+
+/// Largest stencil radius in pixels; bounds the composite stencil so it lives on the stack.
+inline constexpr int max_stencil_radius = 10;
+
+/// Neighbour counts k that select a whole disc of lattice points (no ties broken arbitrarily):
+/// the number of points with 0 < ox^2 + oy^2 <= r2, for each r2 that occurs.
+inline std::vector<int> supported_neighbour_counts() {
+  std::vector<int> counts;
+  constexpr int r = max_stencil_radius;
+  for (int r2 = 1; r2 <= r * r; ++r2) {
+    int n = 0;
+    bool shell = false;
+    for (int oy = -r; oy <= r; ++oy)
+      for (int ox = -r; ox <= r; ++ox) {
+        const int d2 = ox * ox + oy * oy;
+        n += (d2 > 0 && d2 <= r2) ? 1 : 0;
+        shell = shell || d2 == r2;
+      }
+    if (shell) counts.push_back(n);
+  }
+  return counts;
+}
+
+/// One tap of a stencil: integer offset (in pixels) and the squared distance it represents.
+struct stencil_offset {
+  int dy = 0;
+  int dx = 0;
+  int d2 = 0;
+};
+
+/// Adds w * (in shifted by (oy, ox)) to out for whole images, handling the grid's edges.
+/// Along each axis the source range splits into the part that lands inside the grid and the
+/// parts that fall off below/above; `clamp` decides whether those parts pile onto the edge.
+template <class T>
+void shifted_accumulate(const Eigen::Map<const image<T>>& in, Eigen::Map<image<T>>& out,
+                        Eigen::Index oy, Eigen::Index ox, T w, bool clamp) {
+  struct segment {
+    Eigen::Index src, dst, len;
+    bool collapsed;  // all of `len` sources land on the single edge index `dst`
+  };
+  const auto split = [](Eigen::Index n, Eigen::Index o) {
+    std::array<segment, 3> s{};
+    const Eigen::Index lo = std::clamp<Eigen::Index>(-o, 0, n);       // sources with dst < 0
+    const Eigen::Index hi = std::clamp<Eigen::Index>(n - o, lo, n);   // first source with dst >= n
+    s[0] = {0, 0, lo, true};
+    s[1] = {lo, lo + o, hi - lo, false};
+    s[2] = {hi, n - 1, n - hi, true};
+    return s;
+  };
+  const auto rows = split(in.rows(), oy);
+  const auto cols = split(in.cols(), ox);
+  for (const segment& r : rows) {
+    if (r.len == 0 || (r.collapsed && !clamp)) continue;
+    for (const segment& c : cols) {
+      if (c.len == 0 || (c.collapsed && !clamp)) continue;
+      const auto src = in.block(r.src, c.src, r.len, c.len);
+      if (!r.collapsed && !c.collapsed)
+        out.block(r.dst, c.dst, r.len, c.len) += w * src;
+      else if (r.collapsed && !c.collapsed)
+        out.row(r.dst).segment(c.dst, c.len) += w * src.colwise().sum();
+      else if (!r.collapsed && c.collapsed)
+        out.col(c.dst).segment(r.dst, r.len) += w * src.rowwise().sum();
+      else
+        out(r.dst, c.dst) += w * src.sum();
+    }
+  }
+}
+
+}  // namespace detail
+
+/// Grids `odometry_gaussian` can move over: a 2-D image of states on a metric map.
+template <class G>
+concept metric_planar_grid = state_grid<G> && G::dimension == 2 && requires(const G& g) {
+  { g.mm_per_px() } -> std::convertible_to<double>;
+};
+
+/// The paper's motion model: shift by odometry, spread with a Gaussian over k neighbours.
+class odometry_gaussian {
+ public:
+  using control_type = odometry;
+
+  /// Throws std::invalid_argument for a sigma that is not finite and positive, or an
+  /// unsupported k (the message lists the supported values).
+  explicit odometry_gaussian(odometry_gaussian_params params = {}) : params_(params) {
+    if (!(std::isfinite(params.sigma_mm) && params.sigma_mm > 0.0))
+      detail::fail("odometry_gaussian: sigma_mm = ", params.sigma_mm,
+                   "; expected a finite standard deviation > 0 in millimetres");
+    const std::vector<int> counts = detail::supported_neighbour_counts();
+    if (std::find(counts.begin(), counts.end(), params.k) == counts.end()) {
+      std::ostringstream list;
+      for (std::size_t i = 0; i < 8 && i < counts.size(); ++i) list << counts[i] << ", ";
+      detail::fail("odometry_gaussian: k = ", params.k,
+                   " neighbours is not supported; expected a count that selects a whole disc of "
+                   "neighbouring states (", list.str(), "... up to ", counts.back(),
+                   "); the paper uses k = 8 (the 3 x 3 neighbourhood)");
+    }
+    for (int oy = -detail::max_stencil_radius; oy <= detail::max_stencil_radius; ++oy)
+      for (int ox = -detail::max_stencil_radius; ox <= detail::max_stencil_radius; ++ox)
+        offsets_.push_back({oy, ox, ox * ox + oy * oy});
+    std::stable_sort(offsets_.begin(), offsets_.end(),
+                     [](const auto& a, const auto& b) { return a.d2 < b.d2; });
+    offsets_.resize(static_cast<std::size_t>(params.k) + 1);
+    for (const auto& o : offsets_) radius_ = std::max({radius_, std::abs(o.dx), std::abs(o.dy)});
+  }
+
+  [[nodiscard]] const odometry_gaussian_params& params() const { return params_; }
+  /// Half-width in pixels of the Gaussian stencil selected by k.
+  [[nodiscard]] int radius_px() const { return radius_; }
+
+  /// The control update for the whole grid (see the file comment for the maths).
+  template <metric_planar_grid G>
+  prediction_report predict(const G& grid, const belief_array<G>& in, belief_array<G>& out,
+                            const odometry& u) const {
+    using T = typename G::scalar_type;
+    if (!(std::isfinite(u.dx_mm) && std::isfinite(u.dy_mm)))
+      detail::fail("odometry_gaussian: odometry (dx_mm, dy_mm) = (", u.dx_mm, ", ", u.dy_mm,
+                   "); expected finite displacements in millimetres — check the position "
+                   "source for dropped or invalid samples");
+    TACMAP_ASSERT(in.size() == grid.size() && out.size() == grid.size(),
+                  "belief buffers must match the grid");
+
+    // Shift in pixels, split into integer part and fraction for the bilinear kernel.
+    const double sx = u.dx_mm / grid.mm_per_px();
+    const double sy = u.dy_mm / grid.mm_per_px();
+    const double fx_floor = std::floor(sx);
+    const double fy_floor = std::floor(sy);
+    const double limit = static_cast<double>(grid.rows() + grid.cols()) + 4.0 * radius_;
+    if (std::abs(fx_floor) > limit || std::abs(fy_floor) > limit) {
+      if (params_.boundary == off_grid::renormalize)
+        detail::fail<std::domain_error>(
+            "odometry_gaussian: odometry (", u.dx_mm, ", ", u.dy_mm, ") mm moves the sensor ",
+            "farther than the whole map (", grid.px_to_mm(static_cast<double>(grid.cols())), " x ",
+            grid.px_to_mm(static_cast<double>(grid.rows())),
+            " mm of states); expected a displacement since the previous touch, in millimetres");
+    }
+    const auto ix = static_cast<Eigen::Index>(std::clamp(fx_floor, -limit, limit));
+    const auto iy = static_cast<Eigen::Index>(std::clamp(fy_floor, -limit, limit));
+    const double fx = std::clamp(sx - fx_floor, 0.0, 1.0);
+    const double fy = std::clamp(sy - fy_floor, 0.0, 1.0);
+
+    // Composite stencil = Gaussian (k + 1 taps) convolved with the bilinear 2 x 2 kernel.
+    constexpr int side = 2 * detail::max_stencil_radius + 2;
+    std::array<double, static_cast<std::size_t>(side * side)> composite{};
+    const double inv_two_var = 0.5 / std::pow(grid.mm_to_px(params_.sigma_mm), 2);
+    double gauss_sum = 0.0;
+    for (const auto& o : offsets_) gauss_sum += std::exp(-o.d2 * inv_two_var);
+    const std::array<double, 4> bilinear{(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy,
+                                         fx * fy};
+    for (const auto& o : offsets_) {
+      const double g = std::exp(-o.d2 * inv_two_var) / gauss_sum;
+      for (int b = 0; b < 4; ++b) {
+        const int cy = o.dy + (b / 2) + detail::max_stencil_radius;
+        const int cx = o.dx + (b % 2) + detail::max_stencil_radius;
+        composite[static_cast<std::size_t>(cy * side + cx)] += g * bilinear[static_cast<std::size_t>(b)];
+      }
+    }
+
+    TACMAP_ASSERT(grid.size() == grid.rows() * grid.cols(),
+                  "odometry_gaussian moves single-layer (x, y) grids");
+    const Eigen::Map<const image<T>> in_img(in.data(), grid.rows(), grid.cols());
+    Eigen::Map<image<T>> out_img(out.data(), grid.rows(), grid.cols());
+    out.setZero();
+    const bool clamp = params_.boundary == off_grid::clamp;
+    for (int cy = 0; cy < side; ++cy)
+      for (int cx = 0; cx < side; ++cx) {
+        const double w = composite[static_cast<std::size_t>(cy * side + cx)];
+        if (w <= 0.0) continue;
+        detail::shifted_accumulate(in_img, out_img, iy + cy - detail::max_stencil_radius,
+                                   ix + cx - detail::max_stencil_radius, static_cast<T>(w), clamp);
+      }
+
+    const double kept = static_cast<double>(out.sum());
+    const double before = static_cast<double>(in.sum());
+    if (!(kept > 0.0) || !std::isfinite(kept))
+      detail::fail<std::domain_error>(
+          "odometry_gaussian: odometry (", u.dx_mm, ", ", u.dy_mm, ") mm moves all belief mass ",
+          "off the grid; expected a displacement that keeps the sensor over the map — check the "
+          "units (millimetres) and the map-frame calibration, or use off_grid::clamp");
+    out *= static_cast<T>(1.0 / kept);
+    return {std::clamp(1.0 - kept / before, 0.0, 1.0)};
+  }
+
+ private:
+  odometry_gaussian_params params_;
+  std::vector<detail::stencil_offset> offsets_;
+  int radius_ = 0;
+};
+
+}  // namespace tacmap

@@ -1,0 +1,20 @@
+// tacmap: umbrella header — the core library (never the device adapters, which need their own
+// dependencies: include tacmap/devices/... explicitly).
+#pragma once
+
+#include "tacmap/config.hpp"
+#include "tacmap/image.hpp"
+
+#include "tacmap/grid/concept.hpp"
+#include "tacmap/grid/planar_grid.hpp"
+
+#include "tacmap/motion/concept.hpp"
+#include "tacmap/motion/odometry_gaussian.hpp"
+
+#include "tacmap/measurement/concept.hpp"
+
+#include "tacmap/descriptor/concept.hpp"
+
+#include "tacmap/tactile/frame.hpp"
+
+#include "tacmap/filter/bayes_filter.hpp"
