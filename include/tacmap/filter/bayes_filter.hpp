@@ -8,6 +8,7 @@
 // knowledge of where the sensor is (Sec. III-A); `set_prior` takes a user prior instead.
 #pragma once
 
+#include "tacmap/filter/detail/posterior_kernel.hpp"
 #include "tacmap/grid/concept.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/measurement/concept.hpp"
@@ -200,14 +201,13 @@ class bayes_filter {
   // bel = eta * exp(ll - max ll) * bel_bar. Subtracting the maximum first means the best state's
   // factor is exactly 1, so no likelihood underflows to an all-zero posterior by itself.
   update_report apply_log_likelihood(const belief_type& ll, const char* source) {
-    if (!(ll == ll).all()) {
-      Eigen::Index at = 0;
-      while (at < ll.size() && ll(at) == ll(at)) ++at;
-      detail::fail<std::domain_error>("bayes_filter::update: ", source, " is NaN at state ", at,
+    const auto scan = detail::scan_log_likelihood(ll.data(), ll.size());
+    if (scan.first_nan >= 0)
+      detail::fail<std::domain_error>("bayes_filter::update: ", source, " is NaN at state ",
+                                      scan.first_nan,
                                       "; expected finite log-likelihoods (or -infinity for "
                                       "excluded states). The belief is unchanged");
-    }
-    const scalar_type top = ll.maxCoeff();
+    const scalar_type top = scan.max;
     if (top == std::numeric_limits<scalar_type>::infinity())
       detail::fail<std::domain_error>("bayes_filter::update: ", source,
                                       " contains +infinity; expected finite log-likelihoods. "
@@ -217,11 +217,8 @@ class bayes_filter {
                                       " is -infinity everywhere (it rules out every state); "
                                       "expected at least one finite value. The belief is "
                                       "unchanged");
-    // Below log(smallest normal) the factor is treated as exactly 0: Eigen's vectorised exp
-    // returns a denormal (not 0) for -infinity, and an excluded state must stay excluded.
-    const scalar_type floor = std::log(std::numeric_limits<scalar_type>::min());
-    scratch_ = belief_ * ((ll - top) < floor).select(scalar_type(0), (ll - top).exp());
-    const double total = static_cast<double>(scratch_.sum());
+    const double total =
+        detail::weight_by_likelihood(belief_.data(), ll.data(), top, scratch_.data(), ll.size());
     if (!(total > 0.0) || !std::isfinite(total))
       detail::fail<std::domain_error>(
           "bayes_filter::update: ", source, " gives zero probability to every state the belief ",

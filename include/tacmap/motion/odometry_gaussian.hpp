@@ -34,6 +34,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 #include <vector>
 
 namespace tacmap {
@@ -161,6 +162,7 @@ class odometry_gaussian {
                      [](const auto& a, const auto& b) { return a.d2 < b.d2; });
     offsets_.resize(static_cast<std::size_t>(params.k) + 1);
     for (const auto& o : offsets_) radius_ = std::max({radius_, std::abs(o.dx), std::abs(o.dy)});
+    separable_ = offsets_.size() == static_cast<std::size_t>((2 * radius_ + 1) * (2 * radius_ + 1));
   }
 
   [[nodiscard]] const odometry_gaussian_params& params() const { return params_; }
@@ -198,36 +200,74 @@ class odometry_gaussian {
     const double fx = std::clamp(sx - fx_floor, 0.0, 1.0);
     const double fy = std::clamp(sy - fy_floor, 0.0, 1.0);
 
-    // Composite stencil = Gaussian (k + 1 taps) convolved with the bilinear 2 x 2 kernel.
-    constexpr int side = 2 * detail::max_stencil_radius + 2;
-    std::array<double, static_cast<std::size_t>(side * side)> composite{};
     const double inv_two_var = 0.5 / std::pow(grid.mm_to_px(params_.sigma_mm), 2);
-    double gauss_sum = 0.0;
-    for (const auto& o : offsets_) gauss_sum += std::exp(-o.d2 * inv_two_var);
-    const std::array<double, 4> bilinear{(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy,
-                                         fx * fy};
-    for (const auto& o : offsets_) {
-      const double g = std::exp(-o.d2 * inv_two_var) / gauss_sum;
-      for (int b = 0; b < 4; ++b) {
-        const int cy = o.dy + (b / 2) + detail::max_stencil_radius;
-        const int cx = o.dx + (b % 2) + detail::max_stencil_radius;
-        composite[static_cast<std::size_t>(cy * side + cx)] += g * bilinear[static_cast<std::size_t>(b)];
-      }
-    }
-
+    const bool clamp = params_.boundary == off_grid::clamp;
     TACMAP_ASSERT(grid.size() == grid.rows() * grid.cols(),
                   "odometry_gaussian moves single-layer (x, y) grids");
     const Eigen::Map<const image<T>> in_img(in.data(), grid.rows(), grid.cols());
     Eigen::Map<image<T>> out_img(out.data(), grid.rows(), grid.cols());
-    out.setZero();
-    const bool clamp = params_.boundary == off_grid::clamp;
-    for (int cy = 0; cy < side; ++cy)
-      for (int cx = 0; cx < side; ++cx) {
-        const double w = composite[static_cast<std::size_t>(cy * side + cx)];
-        if (w <= 0.0) continue;
-        detail::shifted_accumulate(in_img, out_img, iy + cy - detail::max_stencil_radius,
-                                   ix + cx - detail::max_stencil_radius, static_cast<T>(w), clamp);
+
+    if (separable_) {
+      // Square stencils (k = 8: 3 x 3, k = 24: 5 x 5): the Gaussian and the bilinear kernel both
+      // factor into x and y, so two 1-D passes of 2R + 2 taps replace (2R + 2)^2 2-D taps.
+      // Clamping and dropping also act per axis, so the factorisation is exact.
+      const auto taps = [&](double f) {
+        std::array<double, 2 * detail::max_stencil_radius + 2> w{};
+        double norm = 0.0;
+        for (int o = -radius_; o <= radius_; ++o) norm += std::exp(-o * o * inv_two_var);
+        for (int o = -radius_; o <= radius_; ++o) {
+          const double g = std::exp(-o * o * inv_two_var) / norm;
+          w[static_cast<std::size_t>(o + radius_)] += g * (1.0 - f);
+          w[static_cast<std::size_t>(o + radius_ + 1)] += g * f;
+        }
+        return w;
+      };
+      const auto wx = taps(fx);
+      const auto wy = taps(fy);
+      belief_array<G>& tmp = workspace<T>();
+      tmp.resize(grid.size());
+      Eigen::Map<image<T>> tmp_img(tmp.data(), grid.rows(), grid.cols());
+      tmp.setZero();
+      const Eigen::Map<const image<T>> tmp_in(tmp.data(), grid.rows(), grid.cols());
+      for (int t = 0; t < 2 * radius_ + 2; ++t) {
+        const double w = wx[static_cast<std::size_t>(t)];
+        if (w > 0.0)
+          detail::shifted_accumulate(in_img, tmp_img, 0, ix + t - radius_, static_cast<T>(w), clamp);
       }
+      out.setZero();
+      for (int t = 0; t < 2 * radius_ + 2; ++t) {
+        const double w = wy[static_cast<std::size_t>(t)];
+        if (w > 0.0)
+          detail::shifted_accumulate(tmp_in, out_img, iy + t - radius_, 0, static_cast<T>(w), clamp);
+      }
+    } else {
+      // Any other disc: composite stencil = Gaussian (k + 1 taps) convolved with the bilinear
+      // 2 x 2 kernel, applied as one whole-image multiply-add per tap.
+      constexpr int side = 2 * detail::max_stencil_radius + 2;
+      std::array<double, static_cast<std::size_t>(side * side)> composite{};
+      double gauss_sum = 0.0;
+      for (const auto& o : offsets_) gauss_sum += std::exp(-o.d2 * inv_two_var);
+      const std::array<double, 4> bilinear{(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy,
+                                           fx * fy};
+      for (const auto& o : offsets_) {
+        const double g = std::exp(-o.d2 * inv_two_var) / gauss_sum;
+        for (int b = 0; b < 4; ++b) {
+          const int cy = o.dy + (b / 2) + detail::max_stencil_radius;
+          const int cx = o.dx + (b % 2) + detail::max_stencil_radius;
+          composite[static_cast<std::size_t>(cy * side + cx)] +=
+              g * bilinear[static_cast<std::size_t>(b)];
+        }
+      }
+      out.setZero();
+      for (int cy = 0; cy < side; ++cy)
+        for (int cx = 0; cx < side; ++cx) {
+          const double w = composite[static_cast<std::size_t>(cy * side + cx)];
+          if (w <= 0.0) continue;
+          detail::shifted_accumulate(in_img, out_img, iy + cy - detail::max_stencil_radius,
+                                     ix + cx - detail::max_stencil_radius, static_cast<T>(w),
+                                     clamp);
+        }
+    }
 
     const double kept = static_cast<double>(out.sum());
     const double before = static_cast<double>(in.sum());
@@ -241,9 +281,23 @@ class odometry_gaussian {
   }
 
  private:
+  // The separable path's intermediate image, kept between calls so that predict() does not
+  // allocate. This makes one model object non-reentrant: give each thread its own filter
+  // (models are small values and cheap to copy).
+  template <class T>
+  Eigen::Array<T, Eigen::Dynamic, 1>& workspace() const {
+    if constexpr (std::is_same_v<T, float>)
+      return workspace_f_;
+    else
+      return workspace_d_;
+  }
+
   odometry_gaussian_params params_;
   std::vector<detail::stencil_offset> offsets_;
   int radius_ = 0;
+  bool separable_ = false;
+  mutable Eigen::ArrayXf workspace_f_;
+  mutable Eigen::ArrayXd workspace_d_;
 };
 
 }  // namespace tacmap

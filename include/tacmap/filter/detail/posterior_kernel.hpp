@@ -1,0 +1,104 @@
+// tacmap: the measurement update's inner loops, hand-vectorised with xsimd.
+//
+// bel(x) = eta * bel_bar(x) * exp(ll(x) - max ll)  (paper, Table 1, with log-likelihoods).
+// Two passes: scan (maximum, first NaN) and weight (multiply by exp, accumulate the sum). Each
+// kernel has a plain scalar reference next to it; tests compare the two with tolerances (xsimd's
+// exp and FMA contraction differ from std::exp in the last bits).
+#pragma once
+
+#include <Eigen/Core>
+#include <xsimd/xsimd.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+
+namespace tacmap::detail {
+
+/// Result of scanning a log-likelihood: its maximum and the first NaN (or -1 if none).
+template <class T>
+struct log_likelihood_scan {
+  T max = -std::numeric_limits<T>::infinity();
+  Eigen::Index first_nan = -1;
+};
+
+/// Below log(smallest normal) a factor exp(ll - max) is treated as exactly 0: vectorised exps
+/// return denormals there (Eigen's returns one even for -infinity), and an excluded state
+/// (ll = -infinity) must stay excluded.
+template <class T>
+inline T log_factor_floor() {
+  return std::log(std::numeric_limits<T>::min());
+}
+
+template <class T>
+log_likelihood_scan<T> scan_log_likelihood_scalar(const T* ll, Eigen::Index n) {
+  log_likelihood_scan<T> s;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (std::isnan(ll[i])) {
+      s.first_nan = i;
+      return s;
+    }
+    s.max = std::max(s.max, ll[i]);
+  }
+  return s;
+}
+
+template <class T>
+log_likelihood_scan<T> scan_log_likelihood(const T* ll, Eigen::Index n) {
+  using batch = xsimd::batch<T>;
+  constexpr auto width = static_cast<Eigen::Index>(batch::size);
+  const Eigen::Index vec_end = n - n % width;
+  batch top(-std::numeric_limits<T>::infinity());
+  auto nan_seen = batch(T(0)) != batch(T(0));  // all false
+  for (Eigen::Index i = 0; i < vec_end; i += width) {
+    const batch v = batch::load_unaligned(ll + i);
+    nan_seen = nan_seen || (v != v);
+    top = xsimd::max(top, v);
+  }
+  if (xsimd::any(nan_seen)) return scan_log_likelihood_scalar(ll, n);  // locate it (rare path)
+  alignas(64) T lanes[batch::size];
+  top.store_aligned(lanes);
+  log_likelihood_scan<T> s = scan_log_likelihood_scalar(ll + vec_end, n - vec_end);
+  if (s.first_nan >= 0) {
+    s.first_nan += vec_end;
+    return s;
+  }
+  for (const T lane : lanes) s.max = std::max(s.max, lane);
+  return s;
+}
+
+/// out(i) = prior(i) * exp(ll(i) - top) (0 below the floor); returns the sum of out.
+template <class T>
+double weight_by_likelihood_scalar(const T* prior, const T* ll, T top, T* out, Eigen::Index n) {
+  const T floor = log_factor_floor<T>();
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const T d = ll[i] - top;
+    out[i] = d < floor ? T(0) : prior[i] * std::exp(d);
+    sum += static_cast<double>(out[i]);
+  }
+  return sum;
+}
+
+template <class T>
+double weight_by_likelihood(const T* prior, const T* ll, T top, T* out, Eigen::Index n) {
+  using batch = xsimd::batch<T>;
+  constexpr auto width = static_cast<Eigen::Index>(batch::size);
+  const Eigen::Index vec_end = n - n % width;
+  const batch floor(log_factor_floor<T>());
+  const batch top_b(top);
+  const batch zero(T(0));
+  batch sum(T(0));
+  for (Eigen::Index i = 0; i < vec_end; i += width) {
+    const batch d = batch::load_unaligned(ll + i) - top_b;
+    const batch w = xsimd::select(d < floor, zero, batch::load_unaligned(prior + i) * xsimd::exp(d));
+    w.store_unaligned(out + i);
+    sum += w;
+  }
+  return static_cast<double>(xsimd::hadd(sum)) +
+         weight_by_likelihood_scalar(prior + vec_end, ll + vec_end, top, out + vec_end,
+                                     n - vec_end);
+}
+
+}  // namespace tacmap::detail
