@@ -1,0 +1,153 @@
+// tacmap: tactile preprocessing (paper, Sec. IV-A) — from raw taxel counts to a map-scale image.
+//
+// 1. Reject frames "collected unintentionally": the maximum below a threshold, or the sum of all
+//    taxels below a decision value. A rejected frame is reported to the caller (it is never
+//    silently used, nor silently dropped).
+// 2. Normalise by the frame's maximum, so the image falls into [0, 1].
+// 3. Resize from taxels to map pixels using the cell pitch and the map's scale: the paper's
+//    14 x 6 array at 3.4 mm on a 3.4/3 mm-per-px map becomes 42 x 18 px. The geometry comes with
+//    the frame; nothing here assumes 14 x 6.
+#pragma once
+
+#include "tacmap/image.hpp"
+#include "tacmap/tactile/frame.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace tacmap {
+
+/// How taxel values are spread over map pixels.
+enum class resize_method {
+  bilinear,  ///< interpolate between taxel centres (smooth, like an image resize)
+  nearest,   ///< each taxel fills the pixels whose centres fall in its cell (blocky)
+};
+
+/// Configuration of `preprocess`. Thresholds are in raw counts (Weiss arrays: 12 bit, 0..4095).
+struct preprocess_params {
+  float min_peak = 200.0F;   ///< reject when the largest taxel is below this
+  float min_total = 600.0F;  ///< reject when the sum of all taxels is below this (decision value)
+  double mm_per_px = 3.4 / 3.0;  ///< the map's scale
+  resize_method resize = resize_method::bilinear;
+
+  void validate() const {
+    if (!(std::isfinite(min_peak) && min_peak >= 0.0F))
+      detail::fail("preprocess_params: min_peak = ", min_peak, "; expected a finite count >= 0");
+    if (!(std::isfinite(min_total) && min_total >= 0.0F))
+      detail::fail("preprocess_params: min_total = ", min_total, "; expected a finite count >= 0");
+    if (!(std::isfinite(mm_per_px) && mm_per_px > 0.0))
+      detail::fail("preprocess_params: mm_per_px = ", mm_per_px,
+                   "; expected the map's scale, a finite value > 0 millimetres per pixel");
+  }
+};
+
+/// Why a frame was not used.
+enum class frame_rejection {
+  none,           ///< accepted
+  weak_peak,      ///< max < min_peak: no deliberate contact
+  weak_total,     ///< sum < min_total: too little contact area or force
+};
+
+/// The outcome of preprocessing one frame. `pixels` is valid only when `accepted()`.
+struct preprocessed_frame {
+  frame_rejection rejection = frame_rejection::none;
+  float peak = 0.0F;   ///< the frame's maximum (raw counts)
+  float total = 0.0F;  ///< the frame's sum (raw counts)
+  image<float> pixels;  ///< map-scale tactile image in [0, 1] (rows x cols in map pixels)
+
+  [[nodiscard]] bool accepted() const { return rejection == frame_rejection::none; }
+  /// A sentence for logs: why the frame was rejected (empty when accepted).
+  [[nodiscard]] std::string reason() const {
+    switch (rejection) {
+      case frame_rejection::weak_peak:
+        return "rejected: peak " + std::to_string(peak) + " counts is below min_peak";
+      case frame_rejection::weak_total:
+        return "rejected: total " + std::to_string(total) + " counts is below min_total";
+      case frame_rejection::none:
+        break;
+    }
+    return {};
+  }
+};
+
+/// The size in map pixels of a tactile array of `geometry` on a map of `mm_per_px`: each side's
+/// physical length (taxels x pitch) divided by the scale, rounded to whole pixels.
+[[nodiscard]] inline pixel_size tactile_window(const taxel_geometry& geometry, double mm_per_px) {
+  geometry.validate();
+  const auto side = [&](Eigen::Index taxels) {
+    return static_cast<Eigen::Index>(
+        std::lround(static_cast<double>(taxels) * geometry.pitch_mm / mm_per_px));
+  };
+  return {.width = side(geometry.cols), .height = side(geometry.rows)};
+}
+
+namespace detail {
+
+// Resamples `src` (taxels) to `out_rows x out_cols` pixels. Pixel centres and taxel centres are
+// aligned on the physical extent of the array, so the image is neither shifted nor stretched.
+inline image<float> resize_taxels(const image<float>& src, Eigen::Index out_rows,
+                                  Eigen::Index out_cols, resize_method method) {
+  image<float> out(out_rows, out_cols);
+  const double sy = static_cast<double>(src.rows()) / static_cast<double>(out_rows);
+  const double sx = static_cast<double>(src.cols()) / static_cast<double>(out_cols);
+  for (Eigen::Index r = 0; r < out_rows; ++r) {
+    const double v = (static_cast<double>(r) + 0.5) * sy - 0.5;  // taxel row coordinate
+    for (Eigen::Index c = 0; c < out_cols; ++c) {
+      const double u = (static_cast<double>(c) + 0.5) * sx - 0.5;
+      if (method == resize_method::nearest) {
+        const auto tr = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::lround(v)), 0,
+                                                 src.rows() - 1);
+        const auto tc = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::lround(u)), 0,
+                                                 src.cols() - 1);
+        out(r, c) = src(tr, tc);
+        continue;
+      }
+      const double vc = std::clamp(v, 0.0, static_cast<double>(src.rows() - 1));
+      const double uc = std::clamp(u, 0.0, static_cast<double>(src.cols() - 1));
+      const auto r0 = static_cast<Eigen::Index>(std::floor(vc));
+      const auto c0 = static_cast<Eigen::Index>(std::floor(uc));
+      const Eigen::Index r1 = std::min(r0 + 1, src.rows() - 1);
+      const Eigen::Index c1 = std::min(c0 + 1, src.cols() - 1);
+      const double fy = vc - static_cast<double>(r0);
+      const double fx = uc - static_cast<double>(c0);
+      const double top = (1 - fx) * src(r0, c0) + fx * src(r0, c1);
+      const double bottom = (1 - fx) * src(r1, c0) + fx * src(r1, c1);
+      out(r, c) = static_cast<float>((1 - fy) * top + fy * bottom);
+    }
+  }
+  return out;
+}
+
+}  // namespace detail
+
+/// Preprocesses one frame (Sec. IV-A). Throws std::invalid_argument for a malformed frame
+/// (counts that disagree with the geometry, NaN or negative counts) or bad parameters; a weak
+/// frame is not an error but a rejection, reported in the result.
+[[nodiscard]] inline preprocessed_frame preprocess(const tactile_frame& frame,
+                                                   const preprocess_params& params = {}) {
+  params.validate();
+  frame.validate();
+  preprocessed_frame result;
+  result.peak = frame.counts.maxCoeff();
+  result.total = frame.counts.sum();
+  if (result.peak < params.min_peak || !(result.peak > 0.0F)) {
+    result.rejection = frame_rejection::weak_peak;
+    return result;
+  }
+  if (result.total < params.min_total) {
+    result.rejection = frame_rejection::weak_total;
+    return result;
+  }
+  const pixel_size window = tactile_window(frame.geometry, params.mm_per_px);
+  if (window.width < 1 || window.height < 1)
+    detail::fail("preprocess: a ", frame.geometry.rows, " x ", frame.geometry.cols,
+                 " array at ", frame.geometry.pitch_mm, " mm covers less than one pixel of a map "
+                 "at ", params.mm_per_px, " mm per px; expected a map scale finer than the array");
+  result.pixels = detail::resize_taxels(frame.counts / result.peak, window.height, window.width,
+                                       params.resize);
+  return result;
+}
+
+}  // namespace tacmap
