@@ -12,9 +12,11 @@
 #include "tacmap/motion/odometry_gaussian.hpp"
 
 #include "tacmap/measurement/concept.hpp"
+#include "tacmap/measurement/ncc_likelihood.hpp"
 
 #include "tacmap/descriptor/concept.hpp"
 
 #include "tacmap/tactile/frame.hpp"
+#include "tacmap/tactile/preprocess.hpp"
 
 #include "tacmap/filter/bayes_filter.hpp"
