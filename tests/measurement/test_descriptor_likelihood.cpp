@@ -1,0 +1,143 @@
+#include <doctest/doctest.h>
+
+#include "raw_patch_descriptor.hpp"
+#include "tacmap/measurement/descriptor_likelihood.hpp"
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+using tacmap::descriptor_likelihood;
+using tacmap::descriptor_likelihood_params;
+using tacmap::likelihood_shape;
+using tacmap::pairing;
+using tacmap_test::raw_patch;
+using tacmap_test::raw_patch_generic;
+using grid_t = tacmap::planar_grid<float>;
+
+namespace {
+
+tacmap::image<float> random_image(Eigen::Index rows, Eigen::Index cols, unsigned seed) {
+  std::mt19937 rng(seed);
+  tacmap::image<float> m(rows, cols);
+  for (float& v : m.reshaped()) v = static_cast<float>(rng() % 1000) / 1000.0F;
+  return m;
+}
+
+// Brute force, one window at a time: gather the window's M descriptors from the dense field and
+// sum the distances of eq. (1) directly.
+template <class D>
+Eigen::ArrayXd brute_force(const descriptor_likelihood<D>& model, const grid_t& grid,
+                           const tacmap::image<float>& z, pairing pairs) {
+  const auto g = model.tactile_descriptors(z);
+  const auto& field = model.map_descriptors();
+  Eigen::ArrayXd d(grid.size());
+  for (Eigen::Index i = 0; i < grid.size(); ++i) {
+    const auto cell = grid.cell(i);
+    double sum = 0.0;
+    for (Eigen::Index m = 0; m < model.patches_per_window(); ++m) {
+      const auto o = model.patch_offset(m);
+      const auto f = field.at(cell.row + o.row, cell.col + o.col).template cast<double>();
+      for (Eigen::Index n = 0; n < model.patches_per_window(); ++n)
+        if (pairs == pairing::all_pairs || m == n)
+          sum += std::sqrt((f - g.col(n).template cast<double>()).square().sum());
+    }
+    d(i) = sum;
+  }
+  return d;
+}
+
+}  // namespace
+
+static_assert(tacmap::measurement_model<descriptor_likelihood<raw_patch>, grid_t>);
+static_assert(tacmap::euclidean_descriptor<raw_patch>);
+static_assert(!tacmap::euclidean_descriptor<raw_patch_generic>);
+
+TEST_CASE("the window-sharing fast path equals the per-window brute force") {
+  const auto map = random_image(40, 30, 1);
+  const grid_t grid({.width = 30, .height = 40}, 1.0, {.width = 6, .height = 14});
+  const auto z = random_image(14, 6, 2);
+  for (const pairing pairs : {pairing::all_pairs, pairing::aligned}) {
+    const descriptor_likelihood model(raw_patch{}, map, grid.window_size(),
+                                      {.spacing = 4, .pairs = pairs});
+    REQUIRE(model.patches_per_window() == 3);  // offsets 0, 4, 8 down a 14-tall window
+    const descriptor_likelihood generic(raw_patch_generic{}, map, grid.window_size(),
+                                        {.spacing = 4, .pairs = pairs});
+    Eigen::ArrayXf fast(grid.size());
+    Eigen::ArrayXf slow(grid.size());
+    model.distances(grid, z, fast);
+    generic.distances(grid, z, slow);
+    const Eigen::ArrayXd expected = brute_force(model, grid, z, pairs);
+    CHECK((fast.cast<double>() - expected).abs().maxCoeff() < 1e-3 * expected.maxCoeff());
+    CHECK((slow.cast<double>() - expected).abs().maxCoeff() < 1e-4 * expected.maxCoeff());
+  }
+}
+
+TEST_CASE("likelihood shapes: eq. (2) inverse and exponential, with tempering") {
+  const auto map = random_image(30, 30, 3);
+  const grid_t grid({.width = 30, .height = 30}, 1.0, {.width = 6, .height = 14});
+  const auto z = random_image(14, 6, 4);
+  const descriptor_likelihood inv(raw_patch{}, map, grid.window_size(),
+                                  {.spacing = 4, .epsilon = 0.01, .tempering = 0.5});
+  const descriptor_likelihood expo(raw_patch{}, map, grid.window_size(),
+                                   {.spacing = 4, .shape = likelihood_shape::exponential,
+                                    .tau = 2.0, .tempering = 3.0});
+  Eigen::ArrayXf d(grid.size()), a(grid.size()), b(grid.size());
+  inv.distances(grid, z, d);
+  inv.log_likelihood(grid, z, a);
+  expo.log_likelihood(grid, z, b);
+  for (Eigen::Index i = 0; i < grid.size(); i += 13) {
+    CHECK(a(i) == doctest::Approx(-0.5 * std::log(d(i) + 0.01)).epsilon(1e-5));
+    CHECK(b(i) == doctest::Approx(-3.0 * d(i) / 2.0).epsilon(1e-5));
+  }
+}
+
+TEST_CASE("on a noiseless tactile image cut from the map the true window ranks first") {
+  const auto map = random_image(60, 50, 5);
+  const grid_t grid({.width = 50, .height = 60}, 1.0, {.width = 18, .height = 42});
+  const descriptor_likelihood model(raw_patch{}, map, grid.window_size(), {.spacing = 9});
+  CHECK(model.patches_per_window() == 10);  // 6-px patches at spacing 9: 5 down x 2 across
+  Eigen::ArrayXf ll(grid.size());
+  model.log_likelihood(grid, map.block(7, 21, 42, 18), ll);
+  Eigen::Index best = 0;
+  ll.maxCoeff(&best);
+  CHECK(best == grid.index({7, 21}));
+  CHECK(ll.allFinite());  // d = 0 at the true window: eq. (2) is guarded by epsilon
+}
+
+TEST_CASE("descriptor_likelihood rejects bad input with messages naming the value") {
+  const auto map = random_image(30, 30, 6);
+  const grid_t grid({.width = 30, .height = 30}, 1.0, {.width = 6, .height = 14});
+  const descriptor_likelihood model(raw_patch{}, map, grid.window_size());
+  Eigen::ArrayXf ll(grid.size());
+  const auto message = [&](auto&& call) -> std::string {
+    try {
+      call();
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "no exception";
+  };
+  CHECK(message([&] { model.log_likelihood(grid, random_image(12, 6, 1), ll); })
+            .find("tactile image is 12 x 6 px (rows x cols); expected 14 x 6") != std::string::npos);
+  tacmap::image<float> nan = random_image(14, 6, 1);
+  nan(1, 1) = NAN;
+  CHECK(message([&] { model.log_likelihood(grid, nan, ll); }).find("NaN") != std::string::npos);
+  CHECK(message([&] {
+          descriptor_likelihood(raw_patch{.patch = 8}, map, {.width = 6, .height = 14});
+        }).find("patch of 8 px does not fit") != std::string::npos);
+  CHECK(message([&] {
+          descriptor_likelihood(raw_patch{}, random_image(10, 10, 1), {.width = 6, .height = 14});
+        }).find("no larger than the map") != std::string::npos);
+  CHECK(message([&] {
+          descriptor_likelihood(raw_patch{}, map, {.width = 6, .height = 14}, {.spacing = 0});
+        }).find("spacing = 0") != std::string::npos);
+  CHECK(message([&] {
+          descriptor_likelihood(raw_patch{}, map, {.width = 6, .height = 14}, {.epsilon = 0.0});
+        }).find("epsilon = 0") != std::string::npos);
+  const grid_t other({.width = 31, .height = 30}, 1.0, {.width = 6, .height = 14});
+  Eigen::ArrayXf ll_other(other.size());
+  CHECK(message([&] { model.log_likelihood(other, random_image(14, 6, 1), ll_other); })
+            .find("same map and window") != std::string::npos);
+}
