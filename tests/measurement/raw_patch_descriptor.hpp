@@ -16,6 +16,9 @@ struct raw_patch_t {
   Eigen::Index dimension() const { return patch * patch; }
   Eigen::Index patch_size() const { return patch; }
   tacmap::descriptor_field<float> compute(const tacmap::image<float>& img) const {
+    if (img.rows() < patch || img.cols() < patch)
+      tacmap::detail::fail("raw_patch: image ", img.rows(), " x ", img.cols(),
+                           " is smaller than the patch ", patch);
     tacmap::descriptor_field<float> f;
     f.rows = img.rows() - patch + 1;
     f.cols = img.cols() - patch + 1;

@@ -1,0 +1,123 @@
+// tacmap: conformance suites a user runs on their own descriptor types (doctest).
+//
+// Usage, in ONE test translation unit of your project (doctest's main elsewhere):
+//
+//   #include <doctest/doctest.h>
+//   #include <tacmap/testing/conformance.hpp>
+//   TEST_CASE_TEMPLATE_INVOKE(tacmap_descriptor_conformance, my_descriptor);
+//
+// Requirements on the descriptor type D beyond the `tacmap::descriptor` concept: D is default
+// constructible (its default configuration is what gets tested) and its patch is at most 18 px
+// (the paper's tactile window is 42 x 18 px). The suites check what the filter relies on:
+//  * compute() gives a field of dimension() x positions, finite on textured, flat and all-zero
+//    images, and rejects an image smaller than a patch with std::invalid_argument;
+//  * distance(a, a) == 0, distance(a, b) == distance(b, a) >= 0, finite;
+//  * plugged into `descriptor_likelihood` on the paper's grid, a measurement update leaves a
+//    finite, normalised posterior, and (aligned pairing) a tactile image cut from the map ranks
+//    within 5 mm of its window.
+#pragma once
+
+#include "tacmap/descriptor/concept.hpp"
+#include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/grid/planar_grid.hpp"
+#include "tacmap/measurement/descriptor_likelihood.hpp"
+#include "tacmap/motion/odometry_gaussian.hpp"
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+
+namespace tacmap::testing {
+
+/// A deterministic textured test image in [0, 1]: blobs, bars and an edge (no RNG from the
+/// standard library, whose distributions differ between implementations).
+inline image<float> conformance_image(Eigen::Index rows, Eigen::Index cols, std::uint32_t seed) {
+  image<float> img = image<float>::Zero(rows, cols);
+  std::uint32_t state = seed * 2654435761U + 1U;
+  const auto next = [&state] {  // xorshift32
+    state ^= state << 13U;
+    state ^= state >> 17U;
+    state ^= state << 5U;
+    return state;
+  };
+  for (int k = 0; k < 8; ++k) {
+    const auto r0 = static_cast<Eigen::Index>(next() % static_cast<std::uint32_t>(rows));
+    const auto c0 = static_cast<Eigen::Index>(next() % static_cast<std::uint32_t>(cols));
+    const auto h = std::min<Eigen::Index>(rows - r0, 3 + next() % 12);
+    const auto w = std::min<Eigen::Index>(cols - c0, 3 + next() % 12);
+    img.block(r0, c0, h, w) += 0.3F + static_cast<float>(next() % 70) / 100.0F;
+  }
+  for (Eigen::Index r = 0; r < rows; ++r)
+    for (Eigen::Index c = 0; c < cols; ++c)
+      img(r, c) += 0.2F * std::sin(0.3F * static_cast<float>(r) + 0.17F * static_cast<float>(c));
+  img -= img.minCoeff();
+  return img / img.maxCoeff();
+}
+
+}  // namespace tacmap::testing
+
+TEST_CASE_TEMPLATE_DEFINE("tacmap descriptor conformance", D, tacmap_descriptor_conformance) {
+  static_assert(tacmap::descriptor<D>, "the type must model tacmap::descriptor");
+  using T = typename D::scalar_type;
+  const D d{};
+  const Eigen::Index p = d.patch_size();
+  REQUIRE(d.dimension() > 0);
+  REQUIRE(p > 0);
+  REQUIRE(p <= 18);
+
+  SUBCASE("compute() has the documented shape and finite values") {
+    const tacmap::image<T> img = tacmap::testing::conformance_image(40, 33, 1).template cast<T>();
+    const auto f = d.compute(img);
+    CHECK(f.rows == 40 - p + 1);
+    CHECK(f.cols == 33 - p + 1);
+    CHECK(f.values.rows() == d.dimension());
+    CHECK(f.values.cols() == f.rows * f.cols);
+    CHECK(f.values.allFinite());
+    CHECK(d.compute(tacmap::image<T>::Zero(p + 2, p + 3)).values.allFinite());
+    CHECK(d.compute(tacmap::image<T>::Constant(p + 2, p + 3, T(0.5))).values.allFinite());
+    CHECK_THROWS_AS(d.compute(tacmap::image<T>::Zero(p - 1, p + 3)), std::invalid_argument);
+  }
+
+  SUBCASE("distance is zero on itself, symmetric, finite and non-negative") {
+    const tacmap::image<T> img = tacmap::testing::conformance_image(30, 30, 2).template cast<T>();
+    const auto f = d.compute(img);
+    const Eigen::Index n = f.values.cols();
+    for (Eigen::Index i = 0; i < n; i += 17) {
+      const Eigen::Index j = (i * 7 + 3) % n;
+      const T self = d.distance(f.values.col(i), f.values.col(i));
+      const T ab = d.distance(f.values.col(i), f.values.col(j));
+      const T ba = d.distance(f.values.col(j), f.values.col(i));
+      CHECK(self == doctest::Approx(0.0).epsilon(1e-6));
+      CHECK(std::isfinite(static_cast<double>(ab)));
+      CHECK(ab >= T(0));
+      CHECK(static_cast<double>(ab) == doctest::Approx(static_cast<double>(ba)));
+    }
+  }
+
+  SUBCASE("in the filter: a normalised posterior, and a cut from the map ranks near its window") {
+    using grid_t = tacmap::planar_grid<T>;
+    const tacmap::image<float> map = tacmap::testing::conformance_image(80, 60, 3);
+    const grid_t grid({.width = 60, .height = 80}, 3.4 / 3.0, {.width = 18, .height = 42});
+    const tacmap::grid_cell truth{20, 25};
+    const tacmap::image<float> cut = map.block(truth.row, truth.col, 42, 18);
+    // The paper's configuration (all pairs, eq. (2)): any touch leaves a proper posterior.
+    tacmap::bayes_filter paper(grid, tacmap::odometry_gaussian{},
+                               tacmap::descriptor_likelihood<D>(D{}, map, grid.window_size()));
+    paper.update(cut);
+    CHECK(static_cast<double>(paper.belief().sum()) == doctest::Approx(1.0).epsilon(1e-4));
+    CHECK(paper.belief().allFinite());
+    CHECK(paper.belief().minCoeff() >= T(0));
+    // Aligned pairing makes the noiseless cut's own window the unique zero of eq. (1) (all
+    // pairs keep the cross terms between different patches), so it must win within 5 mm, the
+    // paper's "localized" radius.
+    tacmap::bayes_filter aligned(
+        grid, tacmap::odometry_gaussian{},
+        tacmap::descriptor_likelihood<D>(D{}, map, grid.window_size(),
+                                         {.pairs = tacmap::pairing::aligned}));
+    aligned.update(cut);
+    const auto e = aligned.estimate();
+    CHECK((e.map_mm - grid.state_mm(grid.index(truth))).norm() < 5.0);
+  }
+}
