@@ -12,6 +12,7 @@
 #include "tacmap/motion/odometry_gaussian.hpp"
 
 #include "tacmap/measurement/concept.hpp"
+#include "tacmap/measurement/descriptor_likelihood.hpp"
 #include "tacmap/measurement/ncc_likelihood.hpp"
 
 #include "tacmap/descriptor/concept.hpp"
