@@ -63,9 +63,14 @@ class bayes_filter {
         measurement_(std::move(measurement)),
         belief_(grid_.size()),
         scratch_(grid_.size()),
-        log_likelihood_(grid_.size()) {
+        log_likelihood_(grid_.size()),
+        origin_mm_(grid_.state_mm(0)),
+        offsets_mm_(Grid::dimension, grid_.size()) {
     TACMAP_ASSERT(grid_.size() > 0 && grid_.size() % (grid_.rows() * grid_.cols()) == 0,
                   "a state_grid's size must be a positive multiple of rows * cols");
+    // State coordinates are fixed for the filter's life: cache them (relative to the first
+    // state, which keeps them small) so estimate() is two matrix products, not N grid calls.
+    for (Eigen::Index i = 0; i < grid_.size(); ++i) offsets_mm_.col(i) = grid_.state_mm(i) - origin_mm_;
     reset();
   }
 
@@ -172,22 +177,21 @@ class bayes_filter {
     e.map_probability = static_cast<double>(belief_.maxCoeff(&best));
     e.map_index = best;
     e.map_mm = grid_.state_mm(best);
-    e.mean_mm.setZero();
-    e.covariance_mm2.setZero();
-    double entropy = 0.0;
-    // Accumulate around the MAP state: shifting the origin keeps the covariance accurate
-    // (no catastrophic cancellation between E[x^2] and E[x]^2 for far-from-origin maps).
+    // Moments of the cached coordinates relative to the grid's first state: small numbers, so
+    // E[o o^T] - E[o] E[o]^T does not cancel catastrophically even on a far-from-origin map.
+    typename estimate_type::vector_type mean_offset = estimate_type::vector_type::Zero();
+    typename estimate_type::matrix_type second = estimate_type::matrix_type::Zero();
     for (Eigen::Index i = 0; i < grid_.size(); ++i) {
       const double p = static_cast<double>(belief_(i));
-      if (p <= 0.0) continue;
-      const typename estimate_type::vector_type d = grid_.state_mm(i) - e.map_mm;
-      e.mean_mm += p * d;
-      e.covariance_mm2 += p * d * d.transpose();
-      entropy -= p * std::log(p);
+      const auto o = offsets_mm_.col(i);
+      mean_offset += p * o;
+      second.noalias() += (p * o) * o.transpose();
     }
-    e.covariance_mm2 -= e.mean_mm * e.mean_mm.transpose();
-    e.mean_mm += e.map_mm;
-    e.entropy_nats = entropy;
+    e.covariance_mm2 = second - mean_offset * mean_offset.transpose();
+    e.mean_mm = origin_mm_ + mean_offset;
+    // 0 log 0 = 0: the tiny offset keeps log finite where p = 0 without changing other terms.
+    const scalar_type tiny = std::numeric_limits<scalar_type>::min();
+    e.entropy_nats = -static_cast<double>((belief_ * (belief_ + tiny).log()).sum());
     return e;
   }
 
@@ -235,6 +239,8 @@ class bayes_filter {
   belief_type belief_;
   belief_type scratch_;
   belief_type log_likelihood_;
+  typename estimate_type::vector_type origin_mm_;
+  Eigen::Matrix<double, Grid::dimension, Eigen::Dynamic> offsets_mm_;
 };
 
 }  // namespace tacmap
