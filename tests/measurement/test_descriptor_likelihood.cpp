@@ -59,11 +59,13 @@ TEST_CASE("the window-sharing fast path equals the per-window brute force") {
   const grid_t grid({.width = 30, .height = 40}, 1.0, {.width = 6, .height = 14});
   const auto z = random_image(14, 6, 2);
   for (const pairing pairs : {pairing::all_pairs, pairing::aligned}) {
-    const descriptor_likelihood model(raw_patch{}, map, grid.window_size(),
-                                      {.spacing = 4, .pairs = pairs});
+    const descriptor_likelihood model(
+        raw_patch{}, map, grid.window_size(),
+        {.spacing = 4, .features = tacmap::window_features::shared_dense, .pairs = pairs});
     REQUIRE(model.patches_per_window() == 3);  // offsets 0, 4, 8 down a 14-tall window
-    const descriptor_likelihood generic(raw_patch_generic{}, map, grid.window_size(),
-                                        {.spacing = 4, .pairs = pairs});
+    const descriptor_likelihood generic(
+        raw_patch_generic{}, map, grid.window_size(),
+        {.spacing = 4, .features = tacmap::window_features::shared_dense, .pairs = pairs});
     Eigen::ArrayXf fast(grid.size());
     Eigen::ArrayXf slow(grid.size());
     model.distances(grid, z, fast);
@@ -71,6 +73,36 @@ TEST_CASE("the window-sharing fast path equals the per-window brute force") {
     const Eigen::ArrayXd expected = brute_force(model, grid, z, pairs);
     CHECK((fast.cast<double>() - expected).abs().maxCoeff() < 1e-3 * expected.maxCoeff());
     CHECK((slow.cast<double>() - expected).abs().maxCoeff() < 1e-4 * expected.maxCoeff());
+  }
+}
+
+TEST_CASE("per-window features equal describing every window cut from the map on its own") {
+  // A descriptor whose value depends on the image it is computed on (normalised by that image's
+  // maximum), so per-window and shared features really differ.
+  struct max_normalised : raw_patch {
+    tacmap::descriptor_field<float> compute(const tacmap::image<float>& img) const {
+      return raw_patch::compute(img / img.maxCoeff());
+    }
+  };
+  const auto map = random_image(30, 26, 11);
+  const grid_t grid({.width = 26, .height = 30}, 1.0, {.width = 6, .height = 14});
+  const auto z = random_image(14, 6, 12);
+  for (const pairing pairs : {pairing::all_pairs, pairing::aligned}) {
+    const descriptor_likelihood model(max_normalised{}, map, grid.window_size(),
+                                      {.spacing = 4, .pairs = pairs});
+    Eigen::ArrayXf fast(grid.size());
+    model.distances(grid, z, fast);
+    const auto g = model.tactile_descriptors(z);
+    for (Eigen::Index i = 0; i < grid.size(); ++i) {
+      const auto cell = grid.cell(i);
+      const auto f = max_normalised{}.compute(map.block(cell.row, cell.col, 14, 6));
+      double sum = 0.0;
+      for (Eigen::Index m = 0; m < 3; ++m)
+        for (Eigen::Index n = 0; n < 3; ++n)
+          if (pairs == pairing::all_pairs || m == n)
+            sum += std::sqrt((f.at(4 * m, 0) - g.col(n)).square().sum());
+      CHECK(static_cast<double>(fast(i)) == doctest::Approx(sum).epsilon(1e-4));
+    }
   }
 }
 

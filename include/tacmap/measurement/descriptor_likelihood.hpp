@@ -12,17 +12,24 @@
 //   exponential:  p(z | x) = exp(-d / tau)       -> log p = -d / tau
 // times a tempering exponent (a multiply on the log-likelihood).
 //
-// Sharing: neighbouring windows share patches (window x's patch m is the dense map patch at
-// x + offset_m), so the map's descriptors are computed once, densely, at stride 1. Per touch we
-// compute D_n(q) = || F(q) - g_n || for every dense map position q (one matrix product for
-// Euclidean descriptors: ||F||^2 - 2 F^T g + ||g||^2), then each window's d is a sum of M shifted
-// copies of D — whole-grid block additions, no per-window loop.
+// Where the window descriptors f_{x,m} come from (`window_features`):
+//  * per_window (default, the paper's way): each window is cut from the map and described on its
+//    own, exactly as a tactile image is — so a noiseless touch matches its own window exactly.
+//    Once per map: one extraction per window. Per touch: M x M distances per window.
+//  * shared_dense: neighbouring windows share patches (window x's patch m is the dense map patch
+//    at x + offset_m), so the map is described once, densely, at stride 1, and each window's d is
+//    a sum of M shifted copies of D_n(q) = || F(q) - g_n || — whole-grid block additions, about
+//    M times less work per touch. The price: a window's patch sees the map around the window
+//    (and the whole map's normalisation) where the tactile image sees its own borders; with
+//    descriptors whose support is large next to the window (SIFT-lite's 9 px bins on an 18 px
+//    wide window) this costs accuracy — measured in README.
 #pragma once
 
 #include "tacmap/descriptor/concept.hpp"
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/measurement/concept.hpp"
+#include "tacmap/measurement/detail/distance_kernel.hpp"
 
 #include <cmath>
 #include <concepts>
@@ -44,9 +51,23 @@ enum class likelihood_shape {
   exponential,  ///< exp(-d / tau)
 };
 
+/// Where a window's descriptors come from.
+enum class window_features {
+  /// The paper's way (Sec. III-C, "the same approach is also applied to the visual images"):
+  /// every window is cut from the map and described on its own, exactly like a tactile image —
+  /// same image borders, same normalisation. Precompute: one descriptor extraction per window
+  /// (once per map); per touch: M descriptors per window to compare.
+  per_window,
+  /// Descriptors computed once, densely, over the whole map and shared by overlapping windows:
+  /// far cheaper per touch, but a window's patch sees the map around the window (real
+  /// neighbours, the whole map's normalisation) where the tactile image sees its own borders.
+  shared_dense,
+};
+
 /// Configuration of `descriptor_likelihood`. Defaults: the paper's choices.
 struct descriptor_likelihood_params {
   Eigen::Index spacing = 9;                       ///< pixels between tactile patches (paper: 9)
+  window_features features = window_features::per_window;  ///< paper: per window
   pairing pairs = pairing::all_pairs;             ///< paper: all_pairs (eq. (1))
   likelihood_shape shape = likelihood_shape::inverse;  ///< paper: inverse (eq. (2))
   double epsilon = 1e-3;                          ///< inverse: added to d so that d = 0 is finite
@@ -68,8 +89,9 @@ struct descriptor_likelihood_params {
   }
 };
 
-/// Descriptors whose `distance` is the Euclidean norm opt into the matrix-product fast path by
-/// declaring `static constexpr bool euclidean_distance = true;`.
+/// Descriptors whose `distance` is the Euclidean norm opt into the vectorised whole-array
+/// distance path by declaring `static constexpr bool euclidean_distance = true;` (others are
+/// called through `distance()` once per pair).
 template <class D>
 concept euclidean_descriptor = descriptor<D> && requires {
   requires D::euclidean_distance;
@@ -105,10 +127,30 @@ class descriptor_likelihood {
         offsets_.push_back({oy, ox});
     if (!detail::all_finite(map))
       detail::fail("descriptor_likelihood: the map contains NaN or infinite pixels");
-    field_ = descriptor_.compute(map.template cast<scalar_type>());
+    const image<scalar_type> map_t = map.template cast<scalar_type>();
+    field_ = descriptor_.compute(map_t);
     TACMAP_ASSERT(field_.rows == map.rows() - p + 1 && field_.cols == map.cols() - p + 1,
                   "descriptor::compute returned a field of the wrong shape");
-    field_sq_norm_ = field_.values.colwise().squaredNorm().transpose();
+    field_tiles_ = detail::descriptor_tiles<scalar_type>(field_.values);
+    rows_ = map.rows() - window.height + 1;
+    cols_ = map.cols() - window.width + 1;
+    if (params.features == window_features::per_window) {
+      // One extraction per window, as for a tactile image; patch m of window i goes to column i
+      // of per_window_[m].
+      const Eigen::Index m_count = patches_per_window();
+      per_window_.assign(static_cast<std::size_t>(m_count),
+                         detail::descriptor_tiles<scalar_type>(rows_ * cols_, field_.values.rows()));
+      image<scalar_type> cut(window.height, window.width);
+      for (Eigen::Index r = 0; r < rows_; ++r)
+        for (Eigen::Index c = 0; c < cols_; ++c) {
+          cut = map_t.block(r, c, window.height, window.width);
+          const auto wf = descriptor_.compute(cut);
+          for (Eigen::Index m = 0; m < m_count; ++m) {
+            const grid_cell o = offsets_[static_cast<std::size_t>(m)];
+            per_window_[static_cast<std::size_t>(m)].set(r * cols_ + c, wf.at(o.row, o.col));
+          }
+        }
+    }
   }
 
   /// Number of tactile patches M (the paper: 3).
@@ -146,42 +188,15 @@ class descriptor_likelihood {
   void distances(const G& grid, const measurement_type& z, belief_array<G>& out) const
     requires std::same_as<typename G::scalar_type, scalar_type>
   {
-    const Eigen::Index rows = field_.rows - (window_.height - descriptor_.patch_size());
-    const Eigen::Index cols = field_.cols - (window_.width - descriptor_.patch_size());
-    if (grid.rows() != rows || grid.cols() != cols || grid.size() != rows * cols)
+    if (grid.rows() != rows_ || grid.cols() != cols_ || grid.size() != rows_ * cols_)
       detail::fail("descriptor_likelihood: the grid has ", grid.rows(), " x ", grid.cols(),
-                   " states but the map and window give ", rows, " x ", cols,
+                   " states but the map and window give ", rows_, " x ", cols_,
                    "; build the grid and the model from the same map and window");
     const auto g = tactile_descriptors(z);
-    const Eigen::Index positions = field_.rows * field_.cols;
-    const Eigen::Index m_count = patches_per_window();
-    auto& dist = workspace_;  // positions x M: D_n(q) = || F(q) - g_n ||
-    dist.resize(positions, m_count);
-    if constexpr (euclidean_descriptor<Descriptor>) {
-      // ||F - g||^2 = ||F||^2 - 2 F.g + ||g||^2, one matrix product for all positions.
-      dist.matrix().noalias() = field_.values.matrix().transpose() * g.matrix();
-      const auto g_sq = g.colwise().squaredNorm().eval();
-      for (Eigen::Index n = 0; n < m_count; ++n)
-        dist.col(n) = (field_sq_norm_ - scalar_type(2) * dist.col(n) + g_sq(n)).max(0).sqrt();
-    } else {
-      for (Eigen::Index n = 0; n < m_count; ++n)
-        for (Eigen::Index q = 0; q < positions; ++q)
-          dist(q, n) = descriptor_.distance(field_.values.col(q), g.col(n));
-    }
-    Eigen::Map<image<scalar_type>> d(out.data(), rows, cols);
-    d.setZero();
-    const auto shifted = [&](Eigen::Index n, Eigen::Index m) {
-      const Eigen::Map<const image<scalar_type>> dn(dist.col(n).data(), field_.rows, field_.cols);
-      const grid_cell o = offsets_[static_cast<std::size_t>(m)];
-      return dn.block(o.row, o.col, rows, cols);
-    };
-    if (params_.pairs == pairing::all_pairs) {
-      // sum_m sum_n D_n(x + o_m) = sum_m S(x + o_m) with S = sum_n D_n.
-      for (Eigen::Index n = 1; n < m_count; ++n) dist.col(0) += dist.col(n);
-      for (Eigen::Index m = 0; m < m_count; ++m) d += shifted(0, m);
-    } else {
-      for (Eigen::Index m = 0; m < m_count; ++m) d += shifted(m, m);
-    }
+    if (params_.features == window_features::per_window)
+      per_window_distances(g, out);
+    else
+      shared_distances(g, out);
   }
 
   /// log p(z | x) for every state: eq. (1) then eq. (2) or the exponential, times tempering.
@@ -198,12 +213,66 @@ class descriptor_likelihood {
   }
 
  private:
+  using descriptor_matrix = Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>;
+
+  // out(q) += sum over n in [first, first + count) of || F(q) - g_n ||, F position-major.
+  void accumulate(const detail::descriptor_tiles<scalar_type>& f, const descriptor_matrix& g,
+                  Eigen::Index first, Eigen::Index count, scalar_type* out) const {
+    if constexpr (euclidean_descriptor<Descriptor>) {
+      detail::accumulate_distances(f, g, first, count, out);
+    } else {
+      Eigen::Array<scalar_type, Eigen::Dynamic, 1> column(f.dimension());
+      for (Eigen::Index q = 0; q < f.positions(); ++q) {
+        for (Eigen::Index k = 0; k < f.dimension(); ++k) column(k) = f.at(q, k);
+        for (Eigen::Index n = first; n < first + count; ++n)
+          out[q] += descriptor_.distance(column, g.col(n));
+      }
+    }
+  }
+
+  void per_window_distances(const descriptor_matrix& g,
+                            Eigen::Array<scalar_type, Eigen::Dynamic, 1>& out) const {
+    out.setZero();
+    for (Eigen::Index m = 0; m < patches_per_window(); ++m) {
+      const auto& f = per_window_[static_cast<std::size_t>(m)];
+      if (params_.pairs == pairing::all_pairs)
+        accumulate(f, g, 0, g.cols(), out.data());
+      else
+        accumulate(f, g, m, 1, out.data());
+    }
+  }
+
+  void shared_distances(const descriptor_matrix& g,
+                        Eigen::Array<scalar_type, Eigen::Dynamic, 1>& out) const {
+    const Eigen::Index m_count = patches_per_window();
+    const Eigen::Index positions = field_.rows * field_.cols;
+    // all pairs: one column S = sum_n D_n; aligned: one column D_n per tactile patch.
+    auto& dist = workspace_;
+    dist.setZero(positions, params_.pairs == pairing::all_pairs ? 1 : m_count);
+    if (params_.pairs == pairing::all_pairs)
+      accumulate(field_tiles_, g, 0, m_count, dist.data());
+    else
+      for (Eigen::Index n = 0; n < m_count; ++n) accumulate(field_tiles_, g, n, 1, &dist(0, n));
+    Eigen::Map<image<scalar_type>> d(out.data(), rows_, cols_);
+    d.setZero();
+    for (Eigen::Index m = 0; m < m_count; ++m) {
+      // sum_m sum_n D_n(x + o_m) = sum_m S(x + o_m); aligned: sum_m D_m(x + o_m).
+      const Eigen::Index n = params_.pairs == pairing::all_pairs ? 0 : m;
+      const Eigen::Map<const image<scalar_type>> dn(&dist(0, n), field_.rows, field_.cols);
+      const grid_cell o = offsets_[static_cast<std::size_t>(m)];
+      d += dn.block(o.row, o.col, rows_, cols_);
+    }
+  }
+
   Descriptor descriptor_;
   descriptor_likelihood_params params_;
   pixel_size window_;
   std::vector<grid_cell> offsets_;
+  Eigen::Index rows_ = 0;  // states down
+  Eigen::Index cols_ = 0;  // states across
   descriptor_field<scalar_type> field_;
-  Eigen::Array<scalar_type, Eigen::Dynamic, 1> field_sq_norm_;
+  detail::descriptor_tiles<scalar_type> field_tiles_;  // field_, tiled for the kernel
+  std::vector<detail::descriptor_tiles<scalar_type>> per_window_;  // patch m of every window
   // Per-touch distances, kept between calls so that log_likelihood() does not allocate. This
   // makes one model object non-reentrant: give each thread its own filter.
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> workspace_;

@@ -1,0 +1,90 @@
+// Benchmarks of tacmap::dense_sift: dense descriptors of the paper's 120 x 120 map (Sec. IV-A),
+// the three descriptors of one 42 x 18 tactile image, and the scalar reference for scale.
+//
+// Build (Release, one core):
+//   g++ -O3 -DNDEBUG -march=x86-64-v3 -std=c++20 -Iinclude -isystem /usr/include/eigen3
+//       bench/descriptor_bench.cpp -lbenchmark -lbenchmark_main -lpthread  (one line)
+#include "tacmap/descriptor/dense_sift.hpp"
+
+#include "../tests/descriptor/dense_sift_reference.hpp"
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <random>
+
+namespace {
+
+/// A map-like image: smooth blobs plus a little texture, values in [0, 1].
+tacmap::image<float> map_image(Eigen::Index rows, Eigen::Index cols, unsigned seed) {
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  tacmap::image<float> img(rows, cols);
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    for (Eigen::Index c = 0; c < cols; ++c) {
+      const double x = static_cast<double>(c);
+      const double y = static_cast<double>(r);
+      img(r, c) = static_cast<float>(0.5 + 0.3 * std::sin(x / 7.0) * std::cos(y / 5.0) +
+                                     0.2 * u(gen));
+    }
+  }
+  return img;
+}
+
+template <class D>
+void dense_map(benchmark::State& state) {
+  using T = typename D::scalar_type;
+  const D d;
+  const tacmap::image<T> img = map_image(120, 120, 1).cast<T>();
+  for (auto _ : state) {
+    auto field = d.compute(img);
+    benchmark::DoNotOptimize(field.values.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * (120 - d.patch_size() + 1) *
+                          (120 - d.patch_size() + 1));
+}
+
+template <class D>
+void tactile_samples(benchmark::State& state) {
+  const D d;
+  const auto img = map_image(42, 18, 2);
+  for (auto _ : state) {
+    auto samples = d.sample(img);
+    benchmark::DoNotOptimize(samples.values.data());
+    benchmark::ClobberMemory();
+  }
+}
+
+void reference_sift_lite_map(benchmark::State& state) {
+  const auto img = map_image(120, 120, 1);
+  dsift_reference::mat m(120, 120);
+  for (Eigen::Index r = 0; r < 120; ++r) {
+    for (Eigen::Index c = 0; c < 120; ++c) m(r + 1, c + 1) = static_cast<double>(img(r, c));
+  }
+  const dsift_reference::params prm;  // sift_lite: 2 x 2 x 8, patch 18
+  for (auto _ : state) {
+    auto out = dsift_reference::compute(m, prm);
+    benchmark::DoNotOptimize(out.d.data());
+    benchmark::ClobberMemory();
+  }
+}
+
+}  // namespace
+
+BENCHMARK_TEMPLATE(dense_map, tacmap::sift_lite)->Name("dense_sift/sift_lite/map_120x120")
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(dense_map, tacmap::classic_sift)->Name("dense_sift/classic_sift/map_120x120")
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(dense_map, tacmap::dense_sift<2, 8, double>)
+    ->Name("dense_sift/sift_lite_double/map_120x120")
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(tactile_samples, tacmap::sift_lite)
+    ->Name("dense_sift/sift_lite/tactile_42x18_3_descriptors")
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(tactile_samples, tacmap::classic_sift)
+    ->Name("dense_sift/classic_sift/tactile_42x18_3_descriptors")
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(reference_sift_lite_map)->Name("dense_sift/scalar_reference_sift_lite/map_120x120")
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);

@@ -1,0 +1,121 @@
+// Measurement models on the paper's 120 x 120 map (8,137 states), float, one touch each.
+// Target (issue 3): one SIFT-lite measurement in at most 50 us on one core.
+//
+// `sift_lite_update` is the default (per-window features, the paper's); `*_shared` shares dense
+// map descriptors between overlapping windows. `sift_lite_shared_window_loop_baseline` computes
+// the shared distances one window at a time (3 x 3 distances per window, gathered from the same
+// dense descriptors): its ratio to `sift_lite_update_shared` is what whole-grid sharing buys.
+#include <benchmark/benchmark.h>
+
+#include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/tacmap.hpp"
+
+#include <cmath>
+#include <random>
+
+namespace {
+
+using grid_t = tacmap::planar_grid<float>;
+
+tacmap::image<float> bench_map() {
+  std::mt19937 rng(9);
+  tacmap::image<float> map = tacmap::image<float>::Zero(120, 120);
+  for (int bar = 0; bar < 20; ++bar)
+    map.block(static_cast<Eigen::Index>(rng() % 100), static_cast<Eigen::Index>(rng() % 100),
+              static_cast<Eigen::Index>(3 + rng() % 17), static_cast<Eigen::Index>(3 + rng() % 17)) +=
+        1.0F;
+  for (Eigen::Index r = 0; r < 120; ++r)
+    for (Eigen::Index c = 0; c < 120; ++c)
+      map(r, c) += 0.2F * std::sin(0.2F * static_cast<float>(r + 2 * c));
+  map -= map.minCoeff();
+  return map / map.maxCoeff();
+}
+
+template <class D>
+void descriptor_update(benchmark::State& state, tacmap::pairing pairs,
+                       tacmap::window_features features = tacmap::window_features::per_window) {
+  const auto map = bench_map();
+  const auto grid = grid_t::paper();
+  const tacmap::descriptor_likelihood<D> model(D{}, map, grid.window_size(),
+                                               {.features = features, .pairs = pairs});
+  const tacmap::image<float> z = map.block(30, 40, 42, 18);
+  Eigen::ArrayXf ll(grid.size());
+  for (auto _ : state) {
+    model.log_likelihood(grid, z, ll);
+    benchmark::DoNotOptimize(ll.data());
+  }
+  state.SetItemsProcessed(state.iterations() * grid.size());
+}
+void sift_lite_update(benchmark::State& s) { descriptor_update<tacmap::sift_lite>(s, tacmap::pairing::all_pairs); }
+void sift_lite_update_aligned(benchmark::State& s) { descriptor_update<tacmap::sift_lite>(s, tacmap::pairing::aligned); }
+void classic_sift_update(benchmark::State& s) { descriptor_update<tacmap::classic_sift>(s, tacmap::pairing::all_pairs); }
+void sift_lite_update_shared(benchmark::State& s) {
+  descriptor_update<tacmap::sift_lite>(s, tacmap::pairing::all_pairs, tacmap::window_features::shared_dense);
+}
+BENCHMARK(sift_lite_update);
+BENCHMARK(sift_lite_update_aligned);
+BENCHMARK(sift_lite_update_shared);
+BENCHMARK(classic_sift_update);
+
+template <tacmap::window_features Features>
+void sift_lite_map_precompute(benchmark::State& state) {
+  const auto map = bench_map();
+  const auto grid = grid_t::paper();
+  for (auto _ : state) {
+    const tacmap::descriptor_likelihood<tacmap::sift_lite> model(
+        tacmap::sift_lite{}, map, grid.window_size(), {.features = Features});
+    benchmark::DoNotOptimize(&model);
+  }
+}
+BENCHMARK(sift_lite_map_precompute<tacmap::window_features::per_window>)->Unit(benchmark::kMillisecond);
+BENCHMARK(sift_lite_map_precompute<tacmap::window_features::shared_dense>)->Unit(benchmark::kMillisecond);
+
+void sift_lite_shared_window_loop_baseline(benchmark::State& state) {
+  const auto map = bench_map();
+  const auto grid = grid_t::paper();
+  const tacmap::descriptor_likelihood<tacmap::sift_lite> model(
+      tacmap::sift_lite{}, map, grid.window_size(), {.features = tacmap::window_features::shared_dense});
+  const tacmap::image<float> z = map.block(30, 40, 42, 18);
+  const auto& field = model.map_descriptors();
+  Eigen::ArrayXf d(grid.size());
+  for (auto _ : state) {
+    const auto g = model.tactile_descriptors(z);
+    for (Eigen::Index i = 0; i < grid.size(); ++i) {
+      const auto cell = grid.cell(i);
+      float sum = 0.0F;
+      for (Eigen::Index m = 0; m < 3; ++m) {
+        const auto o = model.patch_offset(m);
+        const auto f = field.at(cell.row + o.row, cell.col + o.col);
+        for (Eigen::Index n = 0; n < 3; ++n) sum += std::sqrt((f - g.col(n)).square().sum());
+      }
+      d(i) = -std::log(sum + 1e-3F);
+    }
+    benchmark::DoNotOptimize(d.data());
+  }
+  state.SetItemsProcessed(state.iterations() * grid.size());
+}
+BENCHMARK(sift_lite_shared_window_loop_baseline);
+
+void ncc_update(benchmark::State& state) {
+  const auto map = bench_map();
+  const auto grid = grid_t::paper();
+  const tacmap::ncc_likelihood<float> model(map, grid.window_size());
+  const tacmap::image<float> z = map.block(30, 40, 42, 18);
+  Eigen::ArrayXf ll(grid.size());
+  for (auto _ : state) {
+    model.log_likelihood(grid, z, ll);
+    benchmark::DoNotOptimize(ll.data());
+  }
+  state.SetItemsProcessed(state.iterations() * grid.size());
+}
+BENCHMARK(ncc_update);
+
+void preprocess_frame(benchmark::State& state) {
+  tacmap::tactile_frame frame;
+  std::mt19937 rng(3);
+  for (float& v : frame.counts.reshaped()) v = static_cast<float>(rng() % 4096);
+  for (auto _ : state) benchmark::DoNotOptimize(tacmap::preprocess(frame).pixels.data());
+}
+BENCHMARK(preprocess_frame);
+
+}  // namespace

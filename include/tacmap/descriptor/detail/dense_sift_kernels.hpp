@@ -1,0 +1,410 @@
+// tacmap: the whole-image kernels behind dense_sift (gradients, orientation channels, pooling).
+//
+// Every stage works on whole rows of the image (Eigen maps over contiguous memory), never on one
+// patch at a time: the cost is O(pixels x channels x taps) whatever the number of patches
+// (reference/dense-sift.md, "Cost structure"). The semantics are Lazebnik's dense SIFT; see
+// dense_sift.hpp for the user-facing description.
+#pragma once
+
+#include "tacmap/image.hpp"
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace tacmap::detail::dsift {
+
+/// Lazebnik pads the image with 2 mirrored pixels on each side ([I(2) I(1) I ... I(end)
+/// I(end-1)] in MATLAB): index -1 reads 0, -2 reads 1, n reads n-1, n+1 reads n-2.
+inline constexpr Eigen::Index mirror_pad = 2;
+
+/// Index of the pixel that the symmetric (edge-duplicating) mirror puts at `i` for a line of
+/// `n >= 2` pixels; valid for -2 <= i < n + 2.
+inline Eigen::Index mirror(Eigen::Index i, Eigen::Index n) {
+  if (i < 0) return -i - 1;
+  if (i >= n) return 2 * n - 1 - i;
+  return i;
+}
+
+/// Separable derivative-of-Gaussian filters in correlation form:
+/// out(x) = sum_{b=-radius}^{radius} taps[b + radius] * in(x + b).
+///
+/// Lazebnik's gen_dgauss samples a 2-D Gaussian on 4*ceil(sigma)+1 pixels, normalises it to
+/// sum 1, differentiates it with MATLAB's `gradient` (central differences inside, one-sided at
+/// the two ends) and rescales each derivative kernel to absolute sum 2. The 2-D Gaussian is the
+/// outer product of the normalised 1-D one, so each derivative kernel is (1-D Gaussian along one
+/// axis) x (1-D differentiated Gaussian along the other), with the same absolute sum.
+template <class T>
+struct gradient_taps {
+  Eigen::Index radius = 0;
+  Eigen::Array<T, Eigen::Dynamic, 1> smooth;      ///< normalised 1-D Gaussian (symmetric)
+  Eigen::Array<T, Eigen::Dynamic, 1> derivative;  ///< grows to the right: positive for b > 0
+};
+
+template <class T>
+gradient_taps<T> make_gradient_taps(double sigma) {
+  gradient_taps<T> taps;
+  taps.radius = 2 * static_cast<Eigen::Index>(std::ceil(sigma));
+  const Eigen::Index n = 2 * taps.radius + 1;
+  Eigen::ArrayXd g(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto x = static_cast<double>(i - taps.radius);
+    g(i) = std::exp(-x * x / (2.0 * sigma * sigma));
+  }
+  g /= g.sum();
+  // MATLAB gradient of the sampled Gaussian.
+  Eigen::ArrayXd dg(n);
+  dg(0) = g(1) - g(0);
+  dg(n - 1) = g(n - 1) - g(n - 2);
+  for (Eigen::Index i = 1; i + 1 < n; ++i) dg(i) = 0.5 * (g(i + 1) - g(i - 1));
+  dg *= 2.0 / dg.abs().sum();
+  // We *convolve* with the kernel (MATLAB's filter2 correlates): the gradient then points
+  // towards brighter pixels. Convolution is correlation with the reversed taps.
+  taps.smooth = g.cast<T>();
+  taps.derivative = dg.reverse().cast<T>();
+  return taps;
+}
+
+/// One non-zero tap of the spatial pooling kernel: pooled(y) += weight * channel(y + offset).
+template <class T>
+struct pooling_tap {
+  Eigen::Index offset = 0;
+  T weight = 0;
+};
+
+/// The triangular pooling kernel of Lazebnik's dense SIFT, as offsets from the sample point.
+///
+/// MATLAB: weight_x(j) = max(0, 1 - |j - (patch/2 - 0.5)| / bin) for j = 1..patch, applied with
+/// conv2(..., 'same'), which for an even length p reads channel(i + p/2 + 1 - j). In offsets
+/// d = p/2 + 1 - j in [1 - p/2, p/2] the weight is max(0, 1 - |d - 1.5| / bin): a triangle of
+/// half-width `bin` centred 1.5 px after the sample point, cut to the kernel's p taps.
+template <class T>
+std::vector<pooling_tap<T>> make_pooling_taps(Eigen::Index patch, Eigen::Index bin) {
+  std::vector<pooling_tap<T>> taps;
+  for (Eigen::Index d = 1 - patch / 2; d <= patch / 2; ++d) {
+    const double w =
+        1.0 - std::abs(static_cast<double>(d) - 1.5) / static_cast<double>(bin);
+    if (w > 0.0) taps.push_back({d, static_cast<T>(w)});
+  }
+  return taps;
+}
+
+/// Calls f(std::integral_constant<unsigned, e>) when 1 <= e <= 16 and returns true, so that a
+/// pixel loop can be compiled for the exponent; returns false for any other e.
+template <class F, unsigned... E>
+bool with_static_exponent(unsigned e, F&& f, std::integer_sequence<unsigned, E...>) {
+  return ((e == E + 1U ? (f(std::integral_constant<unsigned, E + 1U>{}), true) : false) || ...);
+}
+template <class F>
+bool with_static_exponent(unsigned e, F&& f) {
+  return with_static_exponent(e, std::forward<F>(f), std::make_integer_sequence<unsigned, 16>{});
+}
+
+/// c^alpha, in place, for c in [0, 1] (one Eigen fixed-size array of channels): alpha an
+/// integer known at compile time (left-to-right binary powering, fully unrolled: alpha = 9 is 3
+/// squarings and a product), an integer known at run time, or any other positive value.
+template <unsigned Exponent>
+struct static_power {
+  template <class A>
+  void operator()(A& c) const {
+    static_assert(Exponent >= 1U);
+    const A base = c;
+    constexpr int top = std::bit_width(Exponent) - 1;
+    for (int bit = top - 1; bit >= 0; --bit) {  // unrolled: the bounds are constants
+      c = c.square();
+      if (((Exponent >> static_cast<unsigned>(bit)) & 1U) != 0U) c *= base;
+    }
+  }
+};
+struct integral_power {
+  unsigned exponent;
+  template <class A>
+  void operator()(A& c) const {
+    A result = A::Ones();
+    A base = c;
+    for (unsigned e = exponent; e != 0U; e >>= 1U) {
+      if ((e & 1U) != 0U) result *= base;
+      base = base.square();
+    }
+    c = result;
+  }
+};
+template <class T>
+struct real_power {
+  T exponent;
+  template <class A>
+  void operator()(A& c) const {
+    c = c.pow(exponent);
+  }
+};
+
+/// out[i] = sum_t weights[t] * sources[t][i] for i in [0, n): the one inner loop of every filter
+/// here. Blocks of 128 bytes (4 AVX registers) stay in registers across all taps, so each output
+/// is stored once instead of once per tap (about 1.6x faster than tap-by-tap row updates).
+template <class T>
+void weighted_sum(const T* const* sources, const T* weights, std::size_t taps, T* out,
+                  Eigen::Index n) {
+  constexpr Eigen::Index block = 128 / static_cast<Eigen::Index>(sizeof(T));
+  using chunk = Eigen::Array<T, block, 1>;
+  Eigen::Index i = 0;
+  for (; i + block <= n; i += block) {
+    chunk acc = chunk::Zero();
+    for (std::size_t t = 0; t < taps; ++t) {
+      acc += weights[t] * Eigen::Map<const chunk>(sources[t] + i);
+    }
+    Eigen::Map<chunk>(out + i) = acc;
+  }
+  // The tail: whole registers, then single elements, each accumulated in a register (short
+  // rows such as a 42 x 18 tactile image's are mostly tail).
+  constexpr Eigen::Index lane = 32 / static_cast<Eigen::Index>(sizeof(T));
+  using small = Eigen::Array<T, lane, 1>;
+  for (; i + lane <= n; i += lane) {
+    small acc = small::Zero();
+    for (std::size_t t = 0; t < taps; ++t) {
+      acc += weights[t] * Eigen::Map<const small>(sources[t] + i);
+    }
+    Eigen::Map<small>(out + i) = acc;
+  }
+  for (; i < n; ++i) {
+    T acc = 0;
+    for (std::size_t t = 0; t < taps; ++t) acc += weights[t] * sources[t][i];
+    out[i] = acc;
+  }
+}
+
+/// Gradients (gx along columns, gy along rows, y downwards) of `img / scale` with Lazebnik's
+/// border handling: 2 mirrored pixels, the mean of that padded image subtracted, zero beyond
+/// (which only a kernel wider than 5 px, sigma_edge > 1, reaches).
+///
+/// Both passes run over the padded image as one flat array (a row's last 2 * radius outputs
+/// are scratch), so a short tactile row costs no per-row call. Pixel (y, x) of the result is at
+/// y * stride + x with the returned stride = cols + 2 * radius; columns >= cols are scratch.
+template <class T>
+Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>& taps,
+                       Eigen::Array<T, Eigen::Dynamic, 1>& gx,
+                       Eigen::Array<T, Eigen::Dynamic, 1>& gy) {
+  using row_map = Eigen::Map<Eigen::Array<T, Eigen::Dynamic, 1>>;
+  const Eigen::Index h = img.rows();
+  const Eigen::Index w = img.cols();
+  const Eigen::Index r = taps.radius;
+  const Eigen::Index hp = h + 2 * r;
+  const Eigen::Index wp = w + 2 * r;
+  const Eigen::Index m = mirror_pad;
+
+  Eigen::Array<T, Eigen::Dynamic, 1> padded = Eigen::Array<T, Eigen::Dynamic, 1>::Zero(hp * wp);
+  double sum = 0.0;
+  for (Eigen::Index y = -m; y < h + m; ++y) {
+    T* out = padded.data() + (y + r) * wp + r;
+    row_map(out, w) = img.row(mirror(y, h)).transpose() / scale;
+    for (Eigen::Index x = 1; x <= m; ++x) {
+      out[-x] = out[x - 1];
+      out[w - 1 + x] = out[w - x];
+    }
+    sum += static_cast<double>(row_map(out - m, w + 2 * m).sum());
+  }
+  // The kernels sum to zero, so the mean only matters where a wide kernel reaches the zeros
+  // beyond the mirrored pixels; subtracting it there acts as padding with the mean.
+  const auto mean = static_cast<T>(sum / static_cast<double>((h + 2 * m) * (w + 2 * m)));
+  for (Eigen::Index y = -m; y < h + m; ++y) {
+    row_map(padded.data() + (y + r) * wp + r - m, w + 2 * m) -= mean;
+  }
+
+  const auto n_taps = static_cast<std::size_t>(2 * r + 1);
+  std::vector<const T*> src(n_taps);
+  std::vector<const T*> src_x(n_taps);
+  // Horizontal pass: derivative (for gx) and smoothing (for gy). Output i reads padded
+  // i .. i + 2r; the last 2r entries would read past the end and are only scratch: zeroed.
+  Eigen::Array<T, Eigen::Dynamic, 1> dx(hp * wp);
+  Eigen::Array<T, Eigen::Dynamic, 1> sx(hp * wp);
+  for (std::size_t t = 0; t < n_taps; ++t) src[t] = padded.data() + static_cast<Eigen::Index>(t);
+  weighted_sum(src.data(), taps.derivative.data(), n_taps, dx.data(), hp * wp - 2 * r);
+  weighted_sum(src.data(), taps.smooth.data(), n_taps, sx.data(), hp * wp - 2 * r);
+  dx.tail(2 * r).setZero();
+  sx.tail(2 * r).setZero();
+  // Vertical pass: smoothing (gx) and derivative (gy); output row y reads rows y .. y + 2r.
+  gx.resize(h * wp);
+  gy.resize(h * wp);
+  for (std::size_t t = 0; t < n_taps; ++t) {
+    src_x[t] = dx.data() + static_cast<Eigen::Index>(t) * wp;
+    src[t] = sx.data() + static_cast<Eigen::Index>(t) * wp;
+  }
+  weighted_sum(src_x.data(), taps.smooth.data(), n_taps, gx.data(), h * wp);
+  weighted_sum(src.data(), taps.derivative.data(), n_taps, gy.data(), h * wp);
+  return wp;
+}
+
+/// The channel loop for one choice of power (see `orientation_channels`).
+template <int NumAngles, class T, class Power>
+void orientation_channels_with(const Power& power, const Eigen::Array<T, Eigen::Dynamic, 1>& gx,
+                               const Eigen::Array<T, Eigen::Dynamic, 1>& gy, Eigen::Index h,
+                               Eigen::Index w, Eigen::Index stride, Eigen::Index margin,
+                               const Eigen::Array<T, NumAngles, 1>& cos_a,
+                               const Eigen::Array<T, NumAngles, 1>& sin_a, T* channels) {
+  using vec = Eigen::Array<T, NumAngles, 1>;
+  using array = Eigen::Array<T, Eigen::Dynamic, 1>;
+  const Eigen::Index row_size = (w + 2 * margin) * NumAngles;
+  array mag(w);
+  array ux(w);
+  array uy(w);
+  for (Eigen::Index y = 0; y < h; ++y) {
+    // Magnitude and unit gradient for the whole row (vectorised) ...
+    const Eigen::Map<const array> rx(gx.data() + y * stride, w);
+    const Eigen::Map<const array> ry(gy.data() + y * stride, w);
+    mag = (rx.square() + ry.square()).sqrt();
+    // 1 / max(mag, smallest normal) stays finite, and a zero gradient gives 0 * finite = 0.
+    // (Eigen 3.4's select() is not vectorised; this is.)
+    uy = mag.max(std::numeric_limits<T>::min()).inverse();
+    ux = rx * uy;
+    uy *= ry;
+    // ... then all channels of a pixel at once (one register for 8 float channels). A zero
+    // gradient has ux = uy = 0, so every channel is 0; the cosine is clamped to [0, 1] as
+    // rounding may put it a hair above 1.
+    T* row = channels + (y + margin) * row_size + margin * NumAngles;
+    for (Eigen::Index x = 0; x < w; ++x) {
+      vec c = (ux(x) * cos_a + uy(x) * sin_a).max(T(0)).min(T(1));
+      power(c);
+      Eigen::Map<vec>(row + x * NumAngles) = mag(x) * c;
+    }
+  }
+}
+
+/// Orientation channels of an h x w image whose gradients have row stride `stride`:
+/// magnitude * max(0, cos(theta - 2 pi k / NumAngles))^alpha. cos(theta - a_k) is evaluated as
+/// (gx cos a_k + gy sin a_k) / magnitude, so no atan2 is needed; a zero gradient gives zero
+/// channels (Lazebnik sets theta = 0 there, which also gives zero: magnitude 0).
+///
+/// Layout: pixel-major with `margin` zero pixels on every side, channel k of pixel (y, x) at
+/// ((y + margin) * (w + 2 margin) + x + margin) * NumAngles + k. The zeros are the "outside the
+/// image" of the pooling filter, so it needs no bounds checks.
+template <int NumAngles, class T>
+void orientation_channels(const Eigen::Array<T, Eigen::Dynamic, 1>& gx,
+                          const Eigen::Array<T, Eigen::Dynamic, 1>& gy, Eigen::Index h,
+                          Eigen::Index w, Eigen::Index stride, Eigen::Index margin,
+                          const Eigen::Array<T, NumAngles, 1>& cos_a,
+                          const Eigen::Array<T, NumAngles, 1>& sin_a, double alpha,
+                          Eigen::Array<T, Eigen::Dynamic, 1>& channels) {
+  using array = Eigen::Array<T, Eigen::Dynamic, 1>;
+  const Eigen::Index row_size = (w + 2 * margin) * NumAngles;
+  channels.resize((h + 2 * margin) * row_size);
+  channels.head(margin * row_size).setZero();
+  channels.tail(margin * row_size).setZero();
+  for (Eigen::Index y = 0; y < h; ++y) {
+    T* row = channels.data() + (y + margin) * row_size;
+    Eigen::Map<array>(row, margin * NumAngles).setZero();
+    Eigen::Map<array>(row + (w + margin) * NumAngles, margin * NumAngles).setZero();
+  }
+  // An integral alpha takes the squaring path (unrolled for alpha <= 16, the default 9
+  // included); anything else uses pow.
+  const bool integral = alpha == std::floor(alpha) && alpha <= 1048576.0;
+  const auto exponent = integral ? static_cast<unsigned>(alpha) : 0U;
+  auto run = [&](const auto& power) {
+    orientation_channels_with<NumAngles, T>(power, gx, gy, h, w, stride, margin, cos_a, sin_a,
+                                            channels.data());
+  };
+  if (integral &&
+      with_static_exponent(exponent, [&](auto e) { run(static_power<decltype(e)::value>{}); })) {
+    return;
+  }
+  if (integral) {
+    run(integral_power{exponent});
+  } else {
+    run(real_power<T>{static_cast<T>(alpha)});
+  }
+}
+
+/// Pools orientation channels (layout of `orientation_channels`, `margin` >= every tap's
+/// |offset|) with the separable triangular kernel, at columns [x0, x0 + nx) of one image row
+/// per call: the pooled row holds column x0 + ix's channels at out[ix * NumAngles ...].
+///
+/// Vertical pass into a scratch row with zero margins (the channels' margin rows are zero, so
+/// rows outside the image need no test), then the horizontal pass straight out of it: each a
+/// single weighted sum over a whole row.
+template <int NumAngles, class T>
+class row_pooler {
+ public:
+  row_pooler(const std::vector<pooling_tap<T>>& taps, const T* channels, Eigen::Index w,
+             Eigen::Index margin, Eigen::Index x0, Eigen::Index nx)
+      : channels_(channels),
+        w_(w),
+        row_size_((w + 2 * margin) * NumAngles),
+        margin_(margin),
+        nx_(nx),
+        weight_(taps.size()),
+        offset_(taps.size()),
+        src_(taps.size()),
+        src_x_(taps.size()),
+        vertical_(Eigen::Array<T, Eigen::Dynamic, 1>::Zero(row_size_)) {
+    for (std::size_t t = 0; t < taps.size(); ++t) {
+      weight_[t] = taps[t].weight;
+      offset_[t] = taps[t].offset;
+      src_x_[t] = vertical_.data() + (x0 + taps[t].offset + margin) * NumAngles;
+    }
+  }
+
+  // The source pointers point into vertical_: not copyable.
+  row_pooler(const row_pooler&) = delete;
+  row_pooler& operator=(const row_pooler&) = delete;
+
+  /// Pools image row y into out[0, nx * NumAngles).
+  void operator()(Eigen::Index y, T* out) {
+    for (std::size_t t = 0; t < weight_.size(); ++t) {
+      src_[t] = channels_ + (y + offset_[t] + margin_) * row_size_ + margin_ * NumAngles;
+    }
+    weighted_sum(src_.data(), weight_.data(), weight_.size(),
+                 vertical_.data() + margin_ * NumAngles, w_ * NumAngles);
+    weighted_sum(src_x_.data(), weight_.data(), weight_.size(), out, nx_ * NumAngles);
+  }
+
+ private:
+  const T* channels_;
+  Eigen::Index w_;
+  Eigen::Index row_size_;
+  Eigen::Index margin_;
+  Eigen::Index nx_;
+  std::vector<T> weight_;
+  std::vector<Eigen::Index> offset_;
+  std::vector<const T*> src_;
+  std::vector<const T*> src_x_;
+  Eigen::Array<T, Eigen::Dynamic, 1> vertical_;  ///< one row, zero margins
+};
+
+/// Lazebnik's normalisation "that respects flat areas", for `count` consecutive descriptors of
+/// `Size` elements: a descriptor whose L2 norm exceeds `threshold` is scaled to unit length,
+/// clamped at `clamp` and renormalised (Lowe's illumination step); a weaker one (flat or
+/// contact-free region) is left as it is.
+///
+/// Norms of a whole block are computed together: one descriptor at a time is a chain of
+/// dependent reductions, square roots and divisions that took 40% of the dense run.
+template <int Size, class T>
+void normalise(T* data, Eigen::Index count, T threshold, T clamp) {
+  using block = Eigen::Map<Eigen::Array<T, Size, Eigen::Dynamic>>;
+  using row = Eigen::Array<T, 1, Eigen::Dynamic>;
+  block v(data, Size, count);
+  // Separate statements: sqrt and 1/x then vectorise across the block.
+  row norm = v.square().colwise().sum();
+  norm = norm.sqrt();
+  const row inverse = norm.max(std::numeric_limits<T>::min()).inverse();  // finite, even for 0
+  bool any = false;
+  for (Eigen::Index i = 0; i < count; ++i) {
+    if (norm(i) > threshold) {
+      v.col(i) = (v.col(i) * inverse(i)).min(clamp);
+      any = true;
+    }
+  }
+  if (!any) return;
+  // Non-zero: the elements of a unit vector that were > 0 are still > 0 after the clamp.
+  row renorm = v.square().colwise().sum();
+  renorm = renorm.sqrt().inverse();
+  for (Eigen::Index i = 0; i < count; ++i) {
+    if (norm(i) > threshold) v.col(i) *= renorm(i);
+  }
+}
+
+}  // namespace tacmap::detail::dsift
