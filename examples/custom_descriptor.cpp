@@ -69,7 +69,8 @@ int main() {
   const auto grid = tacmap::planar_grid<float>::paper();
   tacmap::descriptor_likelihood<normalised_patch> model(
       normalised_patch{}, map, grid.window_size(),
-      {.spacing = 9, .pairs = tacmap::pairing::aligned,
+      {.spacing = 9, .features = tacmap::window_features::shared_dense,
+       .pairs = tacmap::pairing::aligned,
        .shape = tacmap::likelihood_shape::exponential, .tau = 0.5});
   tacmap::bayes_filter filter(grid, tacmap::odometry_gaussian({.sigma_mm = 1.0, .k = 8}), model);
 

@@ -98,9 +98,9 @@ TEST_CASE_TEMPLATE_DEFINE("tacmap descriptor conformance", D, tacmap_descriptor_
 
   SUBCASE("in the filter: a normalised posterior, and a cut from the map ranks near its window") {
     using grid_t = tacmap::planar_grid<T>;
-    const tacmap::image<float> map = tacmap::testing::conformance_image(80, 60, 3);
-    const grid_t grid({.width = 60, .height = 80}, 3.4 / 3.0, {.width = 18, .height = 42});
-    const tacmap::grid_cell truth{20, 25};
+    const tacmap::image<float> map = tacmap::testing::conformance_image(56, 40, 3);
+    const grid_t grid({.width = 40, .height = 56}, 3.4 / 3.0, {.width = 18, .height = 42});
+    const tacmap::grid_cell truth{9, 13};
     const tacmap::image<float> cut = map.block(truth.row, truth.col, 42, 18);
     // The paper's configuration (all pairs, eq. (2)): any touch leaves a proper posterior.
     tacmap::bayes_filter paper(grid, tacmap::odometry_gaussian{},
