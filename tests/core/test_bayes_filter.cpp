@@ -1,5 +1,7 @@
 #include <doctest/doctest.h>
 
+#include "test_support.hpp"
+
 #include "tacmap/tacmap.hpp"
 
 #include <cmath>
@@ -9,6 +11,8 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+using tacmap_test::message_of;
 
 namespace {
 
@@ -43,15 +47,6 @@ filter_t<T> small_filter() {
                      tacmap::odometry_gaussian({.sigma_mm = 1.0, .k = 8}), table_likelihood<T>{});
 }
 
-template <class E>
-std::string message_of(auto&& call) {
-  try {
-    call();
-  } catch (const E& e) {
-    return e.what();
-  }
-  return "no exception";
-}
 
 }  // namespace
 

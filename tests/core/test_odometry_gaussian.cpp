@@ -1,5 +1,7 @@
 #include <doctest/doctest.h>
 
+#include "test_support.hpp"
+
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/motion/odometry_gaussian.hpp"
 
@@ -11,6 +13,8 @@ using tacmap::odometry;
 using tacmap::odometry_gaussian;
 using grid_t = tacmap::planar_grid<double>;
 using belief_t = tacmap::belief_array<grid_t>;
+
+using tacmap_test::message_of;
 
 namespace {
 
@@ -178,17 +182,6 @@ TEST_CASE("a motion that leaves no mass on the grid is an error, not an all-zero
   CHECK_THROWS_AS(model.predict(g, one_hot(g, 0, 0), out, {1e300, 0.0}), std::domain_error);
 }
 
-namespace {
-template <class E = std::invalid_argument>
-std::string message_of(auto&& make) {
-  try {
-    make();
-  } catch (const E& e) {
-    return e.what();
-  }
-  return "no exception";
-}
-}  // namespace
 
 TEST_CASE("bad motion configuration and odometry are rejected with clear messages") {
   const auto k7 = message_of([] { odometry_gaussian({.sigma_mm = 1.0, .k = 7}); });

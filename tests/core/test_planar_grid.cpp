@@ -1,5 +1,7 @@
 #include <doctest/doctest.h>
 
+#include "test_support.hpp"
+
 #include "tacmap/grid/planar_grid.hpp"
 
 #include <stdexcept>
@@ -51,16 +53,8 @@ TEST_CASE("a map exactly the window's size has one state") {
   CHECK(g.state_mm(0).y() == doctest::Approx(21.0));
 }
 
-namespace {
-std::string message_of(auto&& make) {
-  try {
-    make();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "no exception";
-}
-}  // namespace
+using tacmap_test::message_of;
+
 
 TEST_CASE("bad grid configurations are rejected with messages naming the value") {
   const auto small = message_of([] {

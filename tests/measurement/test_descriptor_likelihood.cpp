@@ -1,5 +1,7 @@
 #include <doctest/doctest.h>
 
+#include "test_support.hpp"
+
 #include "raw_patch_descriptor.hpp"
 #include "tacmap/measurement/descriptor_likelihood.hpp"
 
@@ -143,33 +145,25 @@ TEST_CASE("descriptor_likelihood rejects bad input with messages naming the valu
   const grid_t grid({.width = 30, .height = 30}, 1.0, {.width = 6, .height = 14});
   const descriptor_likelihood model(raw_patch{}, map, grid.window_size());
   Eigen::ArrayXf ll(grid.size());
-  const auto message = [&](auto&& call) -> std::string {
-    try {
-      call();
-    } catch (const std::invalid_argument& e) {
-      return e.what();
-    }
-    return "no exception";
-  };
-  CHECK(message([&] { model.log_likelihood(grid, random_image(12, 6, 1), ll); })
+  CHECK(tacmap_test::message_of([&] { model.log_likelihood(grid, random_image(12, 6, 1), ll); })
             .find("tactile image is 12 x 6 px (rows x cols); expected 14 x 6") != std::string::npos);
   tacmap::image<float> nan = random_image(14, 6, 1);
   nan(1, 1) = NAN;
-  CHECK(message([&] { model.log_likelihood(grid, nan, ll); }).find("NaN") != std::string::npos);
-  CHECK(message([&] {
+  CHECK(tacmap_test::message_of([&] { model.log_likelihood(grid, nan, ll); }).find("NaN") != std::string::npos);
+  CHECK(tacmap_test::message_of([&] {
           descriptor_likelihood(raw_patch{.patch = 8}, map, {.width = 6, .height = 14});
         }).find("patch of 8 px does not fit") != std::string::npos);
-  CHECK(message([&] {
+  CHECK(tacmap_test::message_of([&] {
           descriptor_likelihood(raw_patch{}, random_image(10, 10, 1), {.width = 6, .height = 14});
         }).find("no larger than the map") != std::string::npos);
-  CHECK(message([&] {
+  CHECK(tacmap_test::message_of([&] {
           descriptor_likelihood(raw_patch{}, map, {.width = 6, .height = 14}, {.spacing = 0});
         }).find("spacing = 0") != std::string::npos);
-  CHECK(message([&] {
+  CHECK(tacmap_test::message_of([&] {
           descriptor_likelihood(raw_patch{}, map, {.width = 6, .height = 14}, {.epsilon = 0.0});
         }).find("epsilon = 0") != std::string::npos);
   const grid_t other({.width = 31, .height = 30}, 1.0, {.width = 6, .height = 14});
   Eigen::ArrayXf ll_other(other.size());
-  CHECK(message([&] { model.log_likelihood(other, random_image(14, 6, 1), ll_other); })
+  CHECK(tacmap_test::message_of([&] { model.log_likelihood(other, random_image(14, 6, 1), ll_other); })
             .find("same map and window") != std::string::npos);
 }

@@ -1,5 +1,7 @@
 #include <doctest/doctest.h>
 
+#include "test_support.hpp"
+
 #include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/measurement/ncc_likelihood.hpp"
 #include "tacmap/motion/odometry_gaussian.hpp"
@@ -75,26 +77,18 @@ TEST_CASE("ncc_likelihood rejects bad input with messages naming the value") {
   const tacmap::planar_grid<float> grid({.width = 30, .height = 30}, 1.0, {.width = 6, .height = 9});
   const tacmap::ncc_likelihood<float> model(map, grid.window_size());
   Eigen::ArrayXf ll(grid.size());
-  const auto message = [&](auto&& call) -> std::string {
-    try {
-      call();
-    } catch (const std::invalid_argument& e) {
-      return e.what();
-    }
-    return "no exception";
-  };
-  CHECK(message([&] { model.log_likelihood(grid, random_map(8, 6, 1), ll); })
+  CHECK(tacmap_test::message_of([&] { model.log_likelihood(grid, random_map(8, 6, 1), ll); })
             .find("tactile image is 8 x 6 px (rows x cols); expected 9 x 6") != std::string::npos);
   tacmap::image<float> nan = random_map(9, 6, 1);
   nan(3, 3) = NAN;
-  CHECK(message([&] { model.log_likelihood(grid, nan, ll); }).find("NaN") != std::string::npos);
+  CHECK(tacmap_test::message_of([&] { model.log_likelihood(grid, nan, ll); }).find("NaN") != std::string::npos);
   const tacmap::planar_grid<float> other({.width = 40, .height = 30}, 1.0, {.width = 6, .height = 9});
   Eigen::ArrayXf ll_other(other.size());
-  CHECK(message([&] { model.log_likelihood(other, random_map(9, 6, 1), ll_other); })
+  CHECK(tacmap_test::message_of([&] { model.log_likelihood(other, random_map(9, 6, 1), ll_other); })
             .find("same map and window") != std::string::npos);
-  CHECK(message([&] { tacmap::ncc_likelihood<float>(random_map(5, 5, 1), {.width = 6, .height = 9}); })
+  CHECK(tacmap_test::message_of([&] { tacmap::ncc_likelihood<float>(random_map(5, 5, 1), {.width = 6, .height = 9}); })
             .find("no larger than the map") != std::string::npos);
-  CHECK(message([&] { tacmap::ncc_likelihood<float>(map, {.width = 6, .height = 9}, {.tau = 0.0}); })
+  CHECK(tacmap_test::message_of([&] { tacmap::ncc_likelihood<float>(map, {.width = 6, .height = 9}, {.tau = 0.0}); })
             .find("tau = 0") != std::string::npos);
 }
 

@@ -2,6 +2,8 @@
 // (stb_image, whose implementation lives in this one test translation unit).
 #include <doctest/doctest.h>
 
+#include "test_support.hpp"
+
 #include "tacmap/io/image_io.hpp"
 
 #define STB_IMAGE_IMPLEMENTATION
@@ -16,16 +18,10 @@
 
 using tacmap::image;
 
+using tacmap_test::message_of;
+
 namespace {
 
-std::string message_of(auto&& call) {
-  try {
-    call();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "no exception";
-}
 
 // A non-square gradient with a marker, so that transposes and flips would show.
 image<float> test_image(Eigen::Index rows, Eigen::Index cols) {

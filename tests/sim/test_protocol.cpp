@@ -1,6 +1,8 @@
 // The protocol loader's error messages: each names the FILE, the LINE and the FIELD.
 #include <doctest/doctest.h>
 
+#include "test_support.hpp"
+
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -8,6 +10,8 @@
 #include <string>
 
 #include "tacmap/sim/protocol.hpp"
+
+using tacmap_test::message_of;
 
 namespace {
 
@@ -33,14 +37,6 @@ struct scratch {
   }
 };
 
-std::string message_of(auto&& call) {
-  try {
-    call();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "no exception";
-}
 
 bool contains(const std::string& text, const std::string& part) {
   const bool found = text.find(part) != std::string::npos;

@@ -1,5 +1,7 @@
 #include <doctest/doctest.h>
 
+#include "test_support.hpp"
+
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -15,19 +17,13 @@ using tacmap::map_pose;
 using tacmap::simulator_params;
 using tacmap::tactile_simulator;
 
+using tacmap_test::message_of;
+
 namespace {
 
 constexpr double s = 3.4 / 3.0;  // the paper's map scale
 constexpr tacmap::pixel_size paper_map{.width = 120, .height = 120};
 
-std::string message_of(auto&& call) {
-  try {
-    call();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "no exception";
-}
 
 // A simulator with no noise, no gain spread and no dead taxels: the model's deterministic core.
 simulator_params ideal(simulator_params p = {}) {

@@ -1,5 +1,7 @@
 #include <doctest/doctest.h>
 
+#include "test_support.hpp"
+
 #include "tacmap/tactile/preprocess.hpp"
 
 #include <cmath>
@@ -13,6 +15,8 @@ using tacmap::preprocess_params;
 using tacmap::resize_method;
 using tacmap::tactile_frame;
 
+using tacmap_test::message_of;
+
 namespace {
 tactile_frame paper_frame() {
   tactile_frame f;  // 14 x 6 at 3.4 mm
@@ -20,14 +24,6 @@ tactile_frame paper_frame() {
   f.counts.block(4, 2, 3, 2).setConstant(1000.0F);
   f.counts(5, 3) = 4000.0F;
   return f;
-}
-std::string message_of(auto&& call) {
-  try {
-    call();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "no exception";
 }
 }  // namespace
 
