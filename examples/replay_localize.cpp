@@ -33,7 +33,7 @@
 #include <vector>
 
 #include "tacmap/devices/position_source.hpp"
-#include "tacmap/io/detail/pgm.hpp"
+#include "tacmap/io/image_io.hpp"
 #include "tacmap/io/session_log.hpp"
 #include "tacmap/tacmap.hpp"
 
@@ -112,7 +112,7 @@ int generate(const fs::path& folder) {
   rng r{2015};
   const tacmap::image<float> map = make_map(r);
   fs::create_directories(folder);
-  tacmap::detail::write_pgm(folder / "replay_demo_map.pgm", map);
+  tacmap::write_pgm(folder / "replay_demo_map.pgm", map);
   const grid_t grid({.width = 120, .height = 120}, 3.4 / 3.0, {.width = 18, .height = 42});
 
   tacmap::session_header header;
@@ -196,7 +196,7 @@ int replay(const fs::path& file) {
                  file.string().c_str());
     return 2;
   }
-  const tacmap::image<float> map = tacmap::detail::read_pgm(log.map_path());
+  const tacmap::image<float> map = tacmap::read_pgm(log.map_path());
   tacmap::preprocess_params pre;
   pre.mm_per_px = *h.mm_per_px;
   const tacmap::pixel_size window = tacmap::tactile_window(*h.geometry, *h.mm_per_px);

@@ -20,7 +20,7 @@
 #include "tacmap/devices/weiss/dsacon32m.hpp"
 #include "tacmap/devices/weiss/emulator.hpp"
 #include "tacmap/devices/weiss/wts.hpp"
-#include "tacmap/io/detail/pgm.hpp"
+#include "tacmap/io/image_io.hpp"
 #include "tacmap/io/session_log.hpp"
 #include "tacmap/tacmap.hpp"
 
@@ -312,7 +312,7 @@ int with_sensor(const config& c, Source& source, const tacmap::image<float>& map
 }
 
 int live(const config& c) {
-  const tacmap::image<float> map = tacmap::detail::read_pgm(c.map);
+  const tacmap::image<float> map = tacmap::read_pgm(c.map);
   std::optional<tacmap::session_reader> log;
   if (c.pose_source == config::source::poses) log.emplace(c.poses_file);
   double mm_per_px = 3.4 / 3.0;
