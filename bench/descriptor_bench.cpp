@@ -4,14 +4,13 @@
 // Build (Release, one core):
 //   g++ -O3 -DNDEBUG -march=x86-64-v3 -std=c++20 -Iinclude -isystem /usr/include/eigen3
 //       bench/descriptor_bench.cpp -lbenchmark -lbenchmark_main -lpthread  (one line)
-#include "tacmap/descriptor/dense_sift.hpp"
-
-#include "../tests/descriptor/dense_sift_reference.hpp"
-
 #include <benchmark/benchmark.h>
 
 #include <cmath>
 #include <random>
+
+#include "../tests/descriptor/dense_sift_reference.hpp"
+#include "tacmap/descriptor/dense_sift.hpp"
 
 namespace {
 
@@ -24,8 +23,8 @@ tacmap::image<float> map_image(Eigen::Index rows, Eigen::Index cols, unsigned se
     for (Eigen::Index c = 0; c < cols; ++c) {
       const double x = static_cast<double>(c);
       const double y = static_cast<double>(r);
-      img(r, c) = static_cast<float>(0.5 + 0.3 * std::sin(x / 7.0) * std::cos(y / 5.0) +
-                                     0.2 * u(gen));
+      img(r, c) =
+          static_cast<float>(0.5 + 0.3 * std::sin(x / 7.0) * std::cos(y / 5.0) + 0.2 * u(gen));
     }
   }
   return img;
@@ -72,9 +71,11 @@ void reference_sift_lite_map(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK_TEMPLATE(dense_map, tacmap::sift_lite)->Name("dense_sift/sift_lite/map_120x120")
+BENCHMARK_TEMPLATE(dense_map, tacmap::sift_lite)
+    ->Name("dense_sift/sift_lite/map_120x120")
     ->Unit(benchmark::kMicrosecond);
-BENCHMARK_TEMPLATE(dense_map, tacmap::classic_sift)->Name("dense_sift/classic_sift/map_120x120")
+BENCHMARK_TEMPLATE(dense_map, tacmap::classic_sift)
+    ->Name("dense_sift/classic_sift/map_120x120")
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(dense_map, tacmap::dense_sift<2, 8, double>)
     ->Name("dense_sift/sift_lite_double/map_120x120")
@@ -85,6 +86,7 @@ BENCHMARK_TEMPLATE(tactile_samples, tacmap::sift_lite)
 BENCHMARK_TEMPLATE(tactile_samples, tacmap::classic_sift)
     ->Name("dense_sift/classic_sift/tactile_42x18_3_descriptors")
     ->Unit(benchmark::kMicrosecond);
-BENCHMARK(reference_sift_lite_map)->Name("dense_sift/scalar_reference_sift_lite/map_120x120")
+BENCHMARK(reference_sift_lite_map)
+    ->Name("dense_sift/scalar_reference_sift_lite/map_120x120")
     ->Unit(benchmark::kMillisecond)
     ->Iterations(3);

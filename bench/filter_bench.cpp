@@ -5,10 +5,10 @@
 // mass over the shifted stencil) measured in the same run, for the ratio in README.
 #include <benchmark/benchmark.h>
 
-#include "tacmap/tacmap.hpp"
-
 #include <cmath>
 #include <random>
+
+#include "tacmap/tacmap.hpp"
 
 namespace {
 

@@ -7,11 +7,11 @@
 // dense descriptors): its ratio to `sift_lite_update_shared` is what whole-grid sharing buys.
 #include <benchmark/benchmark.h>
 
-#include "tacmap/descriptor/dense_sift.hpp"
-#include "tacmap/tacmap.hpp"
-
 #include <cmath>
 #include <random>
+
+#include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/tacmap.hpp"
 
 namespace {
 
@@ -22,8 +22,8 @@ tacmap::image<float> bench_map() {
   tacmap::image<float> map = tacmap::image<float>::Zero(120, 120);
   for (int bar = 0; bar < 20; ++bar)
     map.block(static_cast<Eigen::Index>(rng() % 100), static_cast<Eigen::Index>(rng() % 100),
-              static_cast<Eigen::Index>(3 + rng() % 17), static_cast<Eigen::Index>(3 + rng() % 17)) +=
-        1.0F;
+              static_cast<Eigen::Index>(3 + rng() % 17),
+              static_cast<Eigen::Index>(3 + rng() % 17)) += 1.0F;
   for (Eigen::Index r = 0; r < 120; ++r)
     for (Eigen::Index c = 0; c < 120; ++c)
       map(r, c) += 0.2F * std::sin(0.2F * static_cast<float>(r + 2 * c));
@@ -46,11 +46,18 @@ void descriptor_update(benchmark::State& state, tacmap::pairing pairs,
   }
   state.SetItemsProcessed(state.iterations() * grid.size());
 }
-void sift_lite_update(benchmark::State& s) { descriptor_update<tacmap::sift_lite>(s, tacmap::pairing::all_pairs); }
-void sift_lite_update_aligned(benchmark::State& s) { descriptor_update<tacmap::sift_lite>(s, tacmap::pairing::aligned); }
-void classic_sift_update(benchmark::State& s) { descriptor_update<tacmap::classic_sift>(s, tacmap::pairing::all_pairs); }
+void sift_lite_update(benchmark::State& s) {
+  descriptor_update<tacmap::sift_lite>(s, tacmap::pairing::all_pairs);
+}
+void sift_lite_update_aligned(benchmark::State& s) {
+  descriptor_update<tacmap::sift_lite>(s, tacmap::pairing::aligned);
+}
+void classic_sift_update(benchmark::State& s) {
+  descriptor_update<tacmap::classic_sift>(s, tacmap::pairing::all_pairs);
+}
 void sift_lite_update_shared(benchmark::State& s) {
-  descriptor_update<tacmap::sift_lite>(s, tacmap::pairing::all_pairs, tacmap::window_features::shared_dense);
+  descriptor_update<tacmap::sift_lite>(s, tacmap::pairing::all_pairs,
+                                       tacmap::window_features::shared_dense);
 }
 BENCHMARK(sift_lite_update);
 BENCHMARK(sift_lite_update_aligned);
@@ -67,14 +74,17 @@ void sift_lite_map_precompute(benchmark::State& state) {
     benchmark::DoNotOptimize(&model);
   }
 }
-BENCHMARK(sift_lite_map_precompute<tacmap::window_features::per_window>)->Unit(benchmark::kMillisecond);
-BENCHMARK(sift_lite_map_precompute<tacmap::window_features::shared_dense>)->Unit(benchmark::kMillisecond);
+BENCHMARK(sift_lite_map_precompute<tacmap::window_features::per_window>)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(sift_lite_map_precompute<tacmap::window_features::shared_dense>)
+    ->Unit(benchmark::kMillisecond);
 
 void sift_lite_shared_window_loop_baseline(benchmark::State& state) {
   const auto map = bench_map();
   const auto grid = grid_t::paper();
   const tacmap::descriptor_likelihood<tacmap::sift_lite> model(
-      tacmap::sift_lite{}, map, grid.window_size(), {.features = tacmap::window_features::shared_dense});
+      tacmap::sift_lite{}, map, grid.window_size(),
+      {.features = tacmap::window_features::shared_dense});
   const tacmap::image<float> z = map.block(30, 40, 42, 18);
   const auto& field = model.map_descriptors();
   Eigen::ArrayXf d(grid.size());

@@ -10,12 +10,12 @@
 // Noise model of this run: the tactile image is the map window with a different gain and offset
 // (pressure vs. exposure) plus pixel noise (sigma 0.15); the odometry has 0.5 mm noise per axis.
 // Exit status 0 when the final error is below 5 mm (the paper's "localized").
-#include "tacmap/tacmap.hpp"
-
 #include <cmath>
 #include <cstdio>
 #include <random>
 #include <stdexcept>
+
+#include "tacmap/tacmap.hpp"
 
 namespace {
 
@@ -53,10 +53,12 @@ static_assert(tacmap::descriptor<normalised_patch>);
 tacmap::image<float> make_object(std::mt19937& rng) {
   tacmap::image<float> map = tacmap::image<float>::Zero(120, 120);
   std::uniform_int_distribution<Eigen::Index> corner(0, 105), extent(4, 16);
-  for (int bar = 0; bar < 18; ++bar) map.block(corner(rng), corner(rng), extent(rng), extent(rng)) += 1.0F;
+  for (int bar = 0; bar < 18; ++bar)
+    map.block(corner(rng), corner(rng), extent(rng), extent(rng)) += 1.0F;
   for (Eigen::Index r = 0; r < 120; ++r)
     for (Eigen::Index c = 0; c < 120; ++c)
-      map(r, c) += 0.3F * std::sin(0.21F * static_cast<float>(r)) * std::cos(0.13F * static_cast<float>(c));
+      map(r, c) +=
+          0.3F * std::sin(0.21F * static_cast<float>(r)) * std::cos(0.13F * static_cast<float>(c));
   map -= map.minCoeff();
   return map / map.maxCoeff();
 }
@@ -69,9 +71,11 @@ int main() {
   const auto grid = tacmap::planar_grid<float>::paper();
   tacmap::descriptor_likelihood<normalised_patch> model(
       normalised_patch{}, map, grid.window_size(),
-      {.spacing = 9, .features = tacmap::window_features::shared_dense,
+      {.spacing = 9,
+       .features = tacmap::window_features::shared_dense,
        .pairs = tacmap::pairing::aligned,
-       .shape = tacmap::likelihood_shape::exponential, .tau = 0.5});
+       .shape = tacmap::likelihood_shape::exponential,
+       .tau = 0.5});
   tacmap::bayes_filter filter(grid, tacmap::odometry_gaussian({.sigma_mm = 1.0, .k = 8}), model);
 
   std::normal_distribution<float> pixel_noise(0.0F, 0.15F);
@@ -83,7 +87,8 @@ int main() {
     if (step[0] != 0 || step[1] != 0) {
       truth.col += step[0];
       truth.row += step[1];
-      filter.predict({grid.px_to_mm(step[0]) + odo_noise(rng), grid.px_to_mm(step[1]) + odo_noise(rng)});
+      filter.predict(
+          {grid.px_to_mm(step[0]) + odo_noise(rng), grid.px_to_mm(step[1]) + odo_noise(rng)});
     }
     tacmap::image<float> touch = 0.6F * map.block(truth.row, truth.col, 42, 18) + 0.2F;
     for (float& v : touch.reshaped()) v += pixel_noise(rng);

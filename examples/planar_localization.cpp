@@ -11,12 +11,13 @@
 // likelihood over every window (a stand-in until the SIFT-lite model of the paper is used).
 // The filter starts uniform (no prior knowledge) and must lock on within a few touches.
 //
-// Run: planar_localization            Exit status 0 when the final error is below 3 mm (the paper counts 5 mm as localized).
-#include "tacmap/tacmap.hpp"
-
+// Run: planar_localization            Exit status 0 when the final error is below 3 mm (the paper
+// counts 5 mm as localized).
 #include <cmath>
 #include <cstdio>
 #include <random>
+
+#include "tacmap/tacmap.hpp"
 
 namespace {
 

@@ -19,12 +19,12 @@
 #ifndef TACMAP_ASSERT
 #include <cstdio>
 #include <cstdlib>
-#define TACMAP_ASSERT(cond, message)                                                      \
-  do {                                                                                    \
-    if (!(cond)) {                                                                        \
-      std::fprintf(stderr, "tacmap: contract violated at %s:%d: %s (%s)\n", __FILE__,     \
-                   __LINE__, message, #cond);                                             \
-      std::abort();                                                                       \
-    }                                                                                     \
+#define TACMAP_ASSERT(cond, message)                                                            \
+  do {                                                                                          \
+    if (!(cond)) {                                                                              \
+      std::fprintf(stderr, "tacmap: contract violated at %s:%d: %s (%s)\n", __FILE__, __LINE__, \
+                   message, #cond);                                                             \
+      std::abort();                                                                             \
+    }                                                                                           \
   } while (false)
 #endif

@@ -5,14 +5,13 @@
 // row contiguous, which is what the whole-grid kernels stream over.
 #pragma once
 
-#include "tacmap/config.hpp"
-
 #include <Eigen/Core>
-
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+
+#include "tacmap/config.hpp"
 
 namespace tacmap {
 

@@ -1,9 +1,5 @@
 #include <doctest/doctest.h>
 
-#include "test_support.hpp"
-
-#include "tacmap/tacmap.hpp"
-
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -11,6 +7,9 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "tacmap/tacmap.hpp"
+#include "test_support.hpp"
 
 using tacmap_test::message_of;
 
@@ -47,11 +46,10 @@ filter_t<T> small_filter() {
                      tacmap::odometry_gaussian({.sigma_mm = 1.0, .k = 8}), table_likelihood<T>{});
 }
 
-
 }  // namespace
 
-TEST_CASE_TEMPLATE("the initial belief is uniform (the paper assumes no prior knowledge)", T,
-                   float, double) {
+TEST_CASE_TEMPLATE("the initial belief is uniform (the paper assumes no prior knowledge)", T, float,
+                   double) {
   auto f = small_filter<T>();
   REQUIRE(f.belief().size() == 20);
   CHECK((f.belief() - T(1) / T(20)).abs().maxCoeff() < T(1e-7));
@@ -77,7 +75,8 @@ TEST_CASE_TEMPLATE("an update equals Bayes' rule computed by hand", T, float, do
   const Eigen::ArrayXd expected = unnorm / unnorm.sum();
   for (Eigen::Index i = 0; i < 20; ++i)
     CHECK(static_cast<double>(f.belief()(i)) == doctest::Approx(expected(i)).epsilon(1e-5));
-  CHECK(report.log_evidence == doctest::Approx(std::log(unnorm.sum()) - ll.maxCoeff()).epsilon(1e-4));
+  CHECK(report.log_evidence ==
+        doctest::Approx(std::log(unnorm.sum()) - ll.maxCoeff()).epsilon(1e-4));
   CHECK(static_cast<double>(f.belief().sum()) == doctest::Approx(1.0));
 }
 
@@ -181,14 +180,16 @@ TEST_CASE("a failed prediction leaves the belief as it was") {
 
 TEST_CASE("bad priors are rejected") {
   auto f = small_filter<float>();
-  CHECK(message_of<std::invalid_argument>([&] { f.set_prior(Eigen::ArrayXf::Zero(20)); })
-            .find("sums to 0") != std::string::npos);
+  CHECK(message_of<std::invalid_argument>([&] {
+          f.set_prior(Eigen::ArrayXf::Zero(20));
+        }).find("sums to 0") != std::string::npos);
   Eigen::ArrayXf neg = Eigen::ArrayXf::Ones(20);
   neg(4) = -1.0F;
   CHECK(message_of<std::invalid_argument>([&] { f.set_prior(neg); }).find("state 4") !=
         std::string::npos);
-  CHECK(message_of<std::invalid_argument>([&] { f.set_prior(Eigen::ArrayXf::Ones(21)); })
-            .find("21 x 1") != std::string::npos);
+  CHECK(message_of<std::invalid_argument>([&] {
+          f.set_prior(Eigen::ArrayXf::Ones(21));
+        }).find("21 x 1") != std::string::npos);
   CHECK(f.belief().maxCoeff() == doctest::Approx(1.0F / 20.0F));
   // A prior given as an image is laid out row-major like the belief.
   tacmap::image<float> img = tacmap::image<float>::Zero(4, 5);
@@ -247,12 +248,13 @@ TEST_CASE("toy localization on a small 2-D map converges to the true state") {
   tacmap::grid_cell truth{4, 5};
   const auto sense = [&] {
     const int real = colour[static_cast<std::size_t>(grid.index(truth))];
-    return rng() % 10 < 8 ? real : static_cast<int>((static_cast<unsigned>(real) + 1U + rng() % 3) % 4);
+    return rng() % 10 < 8 ? real
+                          : static_cast<int>((static_cast<unsigned>(real) + 1U + rng() % 3) % 4);
   };
   filter.update(sense());
-  const int moves[][2] = {{1, 0}, {1, 1}, {0, 1}, {2, 0}, {0, 2}, {1, 1}, {-1, 1}, {1, 0},
-                          {0, 1}, {1, 1}, {2, 1}, {1, 2}, {0, 1}, {1, 0}, {1, 1}, {1, 1},
-                          {0, 1}, {1, 0}, {1, 1}, {2, 1}};
+  const int moves[][2] = {{1, 0}, {1, 1}, {0, 1}, {2, 0}, {0, 2}, {1, 1}, {-1, 1},
+                          {1, 0}, {0, 1}, {1, 1}, {2, 1}, {1, 2}, {0, 1}, {1, 0},
+                          {1, 1}, {1, 1}, {0, 1}, {1, 0}, {1, 1}, {2, 1}};
   for (const auto& m : moves) {
     truth.col += m[0];
     truth.row += m[1];

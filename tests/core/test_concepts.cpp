@@ -90,7 +90,8 @@ using paper_grid = tacmap::planar_grid<float>;
 static_assert(tacmap::motion_model<stay_put, corridor>);
 static_assert(tacmap::motion_model<tacmap::odometry_gaussian, paper_grid>);
 static_assert(tacmap::motion_model<tacmap::odometry_gaussian, tacmap::planar_grid<double>>);
-static_assert(!tacmap::motion_model<tacmap::odometry_gaussian, corridor>);  // needs a 2-D metric grid
+static_assert(
+    !tacmap::motion_model<tacmap::odometry_gaussian, corridor>);  // needs a 2-D metric grid
 static_assert(!tacmap::motion_model<motion_no_control, corridor>);
 static_assert(!tacmap::motion_model<motion_returns_void, corridor>);
 static_assert(!tacmap::motion_model<motion_mutating, corridor>);

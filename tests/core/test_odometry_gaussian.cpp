@@ -1,13 +1,12 @@
 #include <doctest/doctest.h>
 
-#include "test_support.hpp"
-
-#include "tacmap/grid/planar_grid.hpp"
-#include "tacmap/motion/odometry_gaussian.hpp"
-
 #include <cmath>
 #include <stdexcept>
 #include <string>
+
+#include "tacmap/grid/planar_grid.hpp"
+#include "tacmap/motion/odometry_gaussian.hpp"
+#include "test_support.hpp"
 
 using tacmap::odometry;
 using tacmap::odometry_gaussian;
@@ -139,8 +138,8 @@ TEST_CASE("the prediction is a convolution: linear and shift-invariant over the 
   belief_t mix = 0.25 * one_hot(g, 10, 10) + 0.75 * one_hot(g, 25, 30);
   const odometry u{0.7, -0.3};
   const belief_t out = predict(model, g, mix, u);
-  const belief_t expected =
-      0.25 * predict(model, g, one_hot(g, 10, 10), u) + 0.75 * predict(model, g, one_hot(g, 25, 30), u);
+  const belief_t expected = 0.25 * predict(model, g, one_hot(g, 10, 10), u) +
+                            0.75 * predict(model, g, one_hot(g, 25, 30), u);
   CHECK((out - expected).abs().maxCoeff() < 1e-12);
 }
 
@@ -182,7 +181,6 @@ TEST_CASE("a motion that leaves no mass on the grid is an error, not an all-zero
   CHECK_THROWS_AS(model.predict(g, one_hot(g, 0, 0), out, {1e300, 0.0}), std::domain_error);
 }
 
-
 TEST_CASE("bad motion configuration and odometry are rejected with clear messages") {
   const auto k7 = message_of([] { odometry_gaussian({.sigma_mm = 1.0, .k = 7}); });
   CHECK(k7.find("k = 7") != std::string::npos);
@@ -193,12 +191,15 @@ TEST_CASE("bad motion configuration and odometry are rejected with clear message
         std::string::npos);
   CHECK(message_of([] { odometry_gaussian({.sigma_mm = 1.0, .k = 0}); }).find("k = 0") !=
         std::string::npos);
-  for (const int k : {4, 8, 12, 20, 24, 28, 36, 44, 48, 316}) CHECK_NOTHROW(odometry_gaussian({1.0, k}));
+  for (const int k : {4, 8, 12, 20, 24, 28, 36, 44, 48, 316})
+    CHECK_NOTHROW(odometry_gaussian({1.0, k}));
 
   const auto g = small_grid();
   const odometry_gaussian model;
   belief_t out(g.size());
-  const auto nan = message_of([&] { model.predict(g, one_hot(g, 5, 5), out, {std::nan(""), 0.0}); });
+  const auto nan = message_of([&] {
+    model.predict(g, one_hot(g, 5, 5), out, {std::nan(""), 0.0});
+  });
   CHECK(nan.find("(nan, 0)") != std::string::npos);
   CHECK(nan.find("expected finite displacements in millimetres") != std::string::npos);
   CHECK_THROWS_AS(model.predict(g, one_hot(g, 5, 5), out, {0.0, INFINITY}), std::invalid_argument);

@@ -1,11 +1,10 @@
 #include <doctest/doctest.h>
 
-#include "test_support.hpp"
-
-#include "tacmap/grid/planar_grid.hpp"
-
 #include <stdexcept>
 #include <string>
+
+#include "tacmap/grid/planar_grid.hpp"
+#include "test_support.hpp"
 
 using tacmap::grid_cell;
 using tacmap::planar_grid;
@@ -55,22 +54,20 @@ TEST_CASE("a map exactly the window's size has one state") {
 
 using tacmap_test::message_of;
 
-
 TEST_CASE("bad grid configurations are rejected with messages naming the value") {
-  const auto small = message_of([] {
-    planar_grid<float>({.width = 10, .height = 120}, 1.0, {.width = 18, .height = 42});
-  });
+  const auto small = message_of(
+      [] { planar_grid<float>({.width = 10, .height = 120}, 1.0, {.width = 18, .height = 42}); });
   CHECK(small.find("10 x 120") != std::string::npos);
   CHECK(small.find("smaller than the sensor window 18 x 42") != std::string::npos);
 
-  const auto scale = message_of([] {
-    planar_grid<float>({.width = 120, .height = 120}, -2.0, {.width = 18, .height = 42});
-  });
+  const auto scale = message_of(
+      [] { planar_grid<float>({.width = 120, .height = 120}, -2.0, {.width = 18, .height = 42}); });
   CHECK(scale.find("mm_per_px = -2") != std::string::npos);
   CHECK(scale.find("expected a finite scale > 0") != std::string::npos);
 
   CHECK(message_of([] {
-          planar_grid<float>({.width = 120, .height = 120}, std::nan(""), {.width = 18, .height = 42});
+          planar_grid<float>({.width = 120, .height = 120}, std::nan(""),
+                             {.width = 18, .height = 42});
         }).find("mm_per_px = nan") != std::string::npos);
   CHECK(message_of([] {
           planar_grid<float>({.width = 120, .height = 120}, 1.0, {.width = 0, .height = 42});

@@ -1,12 +1,12 @@
 // The xsimd kernels of the measurement update against their scalar references.
 #include <doctest/doctest.h>
 
-#include "tacmap/filter/detail/posterior_kernel.hpp"
-
 #include <cmath>
 #include <limits>
 #include <random>
 #include <vector>
+
+#include "tacmap/filter/detail/posterior_kernel.hpp"
 
 namespace {
 
@@ -16,9 +16,9 @@ std::vector<T> random_log_likelihood(std::size_t n, std::mt19937& rng) {
   for (auto& v : ll) {
     const auto r = rng() % 100;
     // Mostly moderate values, some hugely negative (underflow territory), some excluded.
-    v = r < 5 ? -std::numeric_limits<T>::infinity()
-              : r < 15 ? -static_cast<T>(rng() % 100000)
-                       : -static_cast<T>(rng() % 4000) / T(100);
+    v = r < 5    ? -std::numeric_limits<T>::infinity()
+        : r < 15 ? -static_cast<T>(rng() % 100000)
+                 : -static_cast<T>(rng() % 4000) / T(100);
   }
   return ll;
 }
@@ -39,10 +39,10 @@ TEST_CASE_TEMPLATE("weight_by_likelihood matches its scalar reference", T, float
     CHECK(scan.max == scan_ref.max);
     std::vector<T> out(n);
     std::vector<T> ref(n);
-    const double sum = tacmap::detail::weight_by_likelihood(prior.data(), ll.data(), scan.max,
-                                                            out.data(), n_idx);
-    const double sum_ref = tacmap::detail::weight_by_likelihood_scalar(
-        prior.data(), ll.data(), scan.max, ref.data(), n_idx);
+    const double sum =
+        tacmap::detail::weight_by_likelihood(prior.data(), ll.data(), scan.max, out.data(), n_idx);
+    const double sum_ref = tacmap::detail::weight_by_likelihood_scalar(prior.data(), ll.data(),
+                                                                       scan.max, ref.data(), n_idx);
     CHECK(sum == doctest::Approx(sum_ref).epsilon(1e-5));
     for (std::size_t i = 0; i < n; ++i) {
       CHECK(static_cast<double>(out[i]) ==

@@ -241,7 +241,8 @@ inline sample_result sample(const mat& image, const params& prm) {
     if (g + p / 2 <= image.cols) out.top_cols.push_back(g - p / 2);
   }
   for (long r : out.top_rows) {
-    for (long c : out.top_cols) out.d.push_back(descriptor_at_grid_point(o, r + p / 2, c + p / 2, prm));
+    for (long c : out.top_cols)
+      out.d.push_back(descriptor_at_grid_point(o, r + p / 2, c + p / 2, prm));
   }
   return out;
 }

@@ -1,9 +1,5 @@
 // Tests of tacmap::dense_sift: the fast whole-image path against the scalar reference, known
 // answers on synthetic images, positions, normalisation and input validation.
-#include "tacmap/descriptor/dense_sift.hpp"
-
-#include "dense_sift_reference.hpp"
-
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -12,6 +8,9 @@
 #include <random>
 #include <string>
 #include <vector>
+
+#include "dense_sift_reference.hpp"
+#include "tacmap/descriptor/dense_sift.hpp"
 
 namespace {
 
@@ -137,8 +136,7 @@ void check_against_reference(const D& d, double tolerance) {
     CAPTURE(rows);
     CAPTURE(cols);
     using T = typename D::scalar_type;
-    CHECK(max_difference_to_reference(d, random_image<T>(rows, cols, ++seed), counts) <=
-          tolerance);
+    CHECK(max_difference_to_reference(d, random_image<T>(rows, cols, ++seed), counts) <= tolerance);
     CHECK(max_difference_to_reference(d, tactile_like_image<T>(rows, cols, ++seed), counts) <=
           tolerance);
   }
@@ -372,8 +370,7 @@ TEST_CASE("dense_sift rejects images that no patch fits and non-finite images") 
                        Contains("the image is 17 x 18 px (rows x cols), smaller than one 18 x 18"),
                        std::invalid_argument);
   CHECK_THROWS_WITH_AS(static_cast<void>(d.compute(random_image<float>(42, 10, 1))),
-                       Contains("42 x 10"),
-                       std::invalid_argument);
+                       Contains("42 x 10"), std::invalid_argument);
   CHECK_THROWS_AS(static_cast<void>(d.compute(image<float>(0, 0))), std::invalid_argument);
   CHECK(d.sample_grid_size({18, 17}) == tacmap::pixel_size{0, 0});
 
@@ -584,7 +581,7 @@ TEST_CASE("element order: bins outer with the bin row fastest, angles inner") {
   }
   Eigen::Index best = -1;
   energy.maxCoeff(&best);
-  CHECK(best == 0 + 4 * 3);                  // (by = 0, bx = 3)
+  CHECK(best == 0 + 4 * 3);                      // (by = 0, bx = 3)
   CHECK(energy(3 + 4 * 0) < 1e-3 * energy(12));  // the transposed bin (by = 3, bx = 0) is empty
   CHECK(classic_sift::element_index(1, 0, 0) == 8);
   CHECK(classic_sift::element_index(0, 1, 0) == 32);

@@ -11,8 +11,9 @@ static_assert(tacmap::euclidean_descriptor<tacmap::sift_lite>);
 static_assert(tacmap::measurement_model<tacmap::descriptor_likelihood<tacmap::sift_lite>,
                                         tacmap::planar_grid<float>>);
 
-TEST_CASE_TEMPLATE("on a noiseless tactile image cut from the map, SIFT ranks the true window first",
-                   D, tacmap::sift_lite, tacmap::classic_sift) {
+TEST_CASE_TEMPLATE(
+    "on a noiseless tactile image cut from the map, SIFT ranks the true window first", D,
+    tacmap::sift_lite, tacmap::classic_sift) {
   // The paper's window and scale on a smaller map (25 x 43 states keeps the Debug build quick).
   const auto map = tacmap::testing::conformance_image(66, 60, 11);
   const tacmap::planar_grid<float> grid({.width = 60, .height = 66}, 3.4 / 3.0,

@@ -1,9 +1,9 @@
 // A small descriptor for tests: the raw pixels of a p x p patch (dimension p^2), Euclidean.
 #pragma once
 
-#include "tacmap/descriptor/concept.hpp"
-
 #include <cmath>
+
+#include "tacmap/descriptor/concept.hpp"
 
 namespace tacmap_test {
 

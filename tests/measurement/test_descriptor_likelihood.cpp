@@ -1,14 +1,13 @@
 #include <doctest/doctest.h>
 
-#include "test_support.hpp"
-
-#include "raw_patch_descriptor.hpp"
-#include "tacmap/measurement/descriptor_likelihood.hpp"
-
 #include <cmath>
 #include <random>
 #include <stdexcept>
 #include <string>
+
+#include "raw_patch_descriptor.hpp"
+#include "tacmap/measurement/descriptor_likelihood.hpp"
+#include "test_support.hpp"
 
 using tacmap::descriptor_likelihood;
 using tacmap::descriptor_likelihood_params;
@@ -113,10 +112,13 @@ TEST_CASE("likelihood shapes: eq. (2) inverse and exponential, with tempering") 
   const grid_t grid({.width = 30, .height = 30}, 1.0, {.width = 6, .height = 14});
   const auto z = random_image(14, 6, 4);
   const descriptor_likelihood inv(raw_patch{}, map, grid.window_size(),
-                                  {.spacing = 4, .epsilon = 0.01, .tempering = 0.5});
-  const descriptor_likelihood expo(raw_patch{}, map, grid.window_size(),
-                                   {.spacing = 4, .shape = likelihood_shape::exponential,
-                                    .tau = 2.0, .tempering = 3.0});
+                                  {.spacing = 4,
+                                   .shape = likelihood_shape::inverse,
+                                   .epsilon = 0.01,
+                                   .tempering = 0.5});
+  const descriptor_likelihood expo(
+      raw_patch{}, map, grid.window_size(),
+      {.spacing = 4, .shape = likelihood_shape::exponential, .tau = 2.0, .tempering = 3.0});
   Eigen::ArrayXf d(grid.size()), a(grid.size()), b(grid.size());
   inv.distances(grid, z, d);
   inv.log_likelihood(grid, z, a);
@@ -145,11 +147,13 @@ TEST_CASE("descriptor_likelihood rejects bad input with messages naming the valu
   const grid_t grid({.width = 30, .height = 30}, 1.0, {.width = 6, .height = 14});
   const descriptor_likelihood model(raw_patch{}, map, grid.window_size());
   Eigen::ArrayXf ll(grid.size());
-  CHECK(tacmap_test::message_of([&] { model.log_likelihood(grid, random_image(12, 6, 1), ll); })
-            .find("tactile image is 12 x 6 px (rows x cols); expected 14 x 6") != std::string::npos);
+  CHECK(tacmap_test::message_of([&] {
+          model.log_likelihood(grid, random_image(12, 6, 1), ll);
+        }).find("tactile image is 12 x 6 px (rows x cols); expected 14 x 6") != std::string::npos);
   tacmap::image<float> nan = random_image(14, 6, 1);
   nan(1, 1) = NAN;
-  CHECK(tacmap_test::message_of([&] { model.log_likelihood(grid, nan, ll); }).find("NaN") != std::string::npos);
+  CHECK(tacmap_test::message_of([&] { model.log_likelihood(grid, nan, ll); }).find("NaN") !=
+        std::string::npos);
   CHECK(tacmap_test::message_of([&] {
           descriptor_likelihood(raw_patch{.patch = 8}, map, {.width = 6, .height = 14});
         }).find("patch of 8 px does not fit") != std::string::npos);
@@ -164,6 +168,7 @@ TEST_CASE("descriptor_likelihood rejects bad input with messages naming the valu
         }).find("epsilon = 0") != std::string::npos);
   const grid_t other({.width = 31, .height = 30}, 1.0, {.width = 6, .height = 14});
   Eigen::ArrayXf ll_other(other.size());
-  CHECK(tacmap_test::message_of([&] { model.log_likelihood(other, random_image(14, 6, 1), ll_other); })
-            .find("same map and window") != std::string::npos);
+  CHECK(tacmap_test::message_of([&] {
+          model.log_likelihood(other, random_image(14, 6, 1), ll_other);
+        }).find("same map and window") != std::string::npos);
 }

@@ -1,9 +1,9 @@
 // The xsimd distance kernel of descriptor_likelihood against its scalar reference.
 #include <doctest/doctest.h>
 
-#include "tacmap/measurement/detail/distance_kernel.hpp"
-
 #include <random>
+
+#include "tacmap/measurement/detail/distance_kernel.hpp"
 
 TEST_CASE_TEMPLATE("accumulate_distances matches its scalar reference", T, float, double) {
   std::mt19937 rng(21);
@@ -19,13 +19,16 @@ TEST_CASE_TEMPLATE("accumulate_distances matches its scalar reference", T, float
       const tacmap::detail::descriptor_tiles<T> tiles(f);
       for (Eigen::Index q = 0; q < positions; q += 3)
         for (Eigen::Index k = 0; k < dim; ++k) REQUIRE(tiles.at(q, k) == f(k, q));
-      for (const auto& [first, count] : {std::pair<Eigen::Index, Eigen::Index>{0, 5}, {2, 1}, {1, 3}, {3, 2}}) {
-        Eigen::Array<T, Eigen::Dynamic, 1> fast = Eigen::Array<T, Eigen::Dynamic, 1>::Constant(positions, T(0.5));
+      for (const auto& [first, count] :
+           {std::pair<Eigen::Index, Eigen::Index>{0, 5}, {2, 1}, {1, 3}, {3, 2}}) {
+        Eigen::Array<T, Eigen::Dynamic, 1> fast =
+            Eigen::Array<T, Eigen::Dynamic, 1>::Constant(positions, T(0.5));
         Eigen::Array<T, Eigen::Dynamic, 1> ref = fast;
         tacmap::detail::accumulate_distances(tiles, g, first, count, fast.data());
         tacmap::detail::accumulate_distances_scalar(tiles, g, first, count, ref.data());
         for (Eigen::Index q = 0; q < positions; ++q)
-          CHECK(static_cast<double>(fast(q)) == doctest::Approx(static_cast<double>(ref(q))).epsilon(1e-5));
+          CHECK(static_cast<double>(fast(q)) ==
+                doctest::Approx(static_cast<double>(ref(q))).epsilon(1e-5));
         if (first == 2 && count == 1) CHECK(fast(0) == T(0.5));  // + exactly 0
       }
     }

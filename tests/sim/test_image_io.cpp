@@ -2,9 +2,8 @@
 // (stb_image, whose implementation lives in this one test translation unit).
 #include <doctest/doctest.h>
 
-#include "test_support.hpp"
-
 #include "tacmap/io/image_io.hpp"
+#include "test_support.hpp"
 
 #define STB_IMAGE_IMPLEMENTATION
 #define STBI_ONLY_PNG
@@ -21,7 +20,6 @@ using tacmap::image;
 using tacmap_test::message_of;
 
 namespace {
-
 
 // A non-square gradient with a marker, so that transposes and flips would show.
 image<float> test_image(Eigen::Index rows, Eigen::Index cols) {

@@ -1,8 +1,6 @@
 // The protocol loader's error messages: each names the FILE, the LINE and the FIELD.
 #include <doctest/doctest.h>
 
-#include "test_support.hpp"
-
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +8,7 @@
 #include <string>
 
 #include "tacmap/sim/protocol.hpp"
+#include "test_support.hpp"
 
 using tacmap_test::message_of;
 
@@ -36,7 +35,6 @@ struct scratch {
     return dir / name;
   }
 };
-
 
 bool contains(const std::string& text, const std::string& part) {
   const bool found = text.find(part) != std::string::npos;

@@ -1,7 +1,5 @@
 #include <doctest/doctest.h>
 
-#include "test_support.hpp"
-
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -11,6 +9,7 @@
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/sim/tactile_simulator.hpp"
 #include "tacmap/tactile/preprocess.hpp"
+#include "test_support.hpp"
 
 using tacmap::image;
 using tacmap::map_pose;
@@ -23,7 +22,6 @@ namespace {
 
 constexpr double s = 3.4 / 3.0;  // the paper's map scale
 constexpr tacmap::pixel_size paper_map{.width = 120, .height = 120};
-
 
 // A simulator with no noise, no gain spread and no dead taxels: the model's deterministic core.
 simulator_params ideal(simulator_params p = {}) {

@@ -1,13 +1,12 @@
 #include <doctest/doctest.h>
 
-#include "test_support.hpp"
-
-#include "tacmap/tactile/preprocess.hpp"
-
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
+
+#include "tacmap/tactile/preprocess.hpp"
+#include "test_support.hpp"
 
 using tacmap::frame_rejection;
 using tacmap::preprocess;
@@ -99,8 +98,10 @@ TEST_CASE("malformed frames and parameters raise errors naming the value") {
   f = paper_frame();
   f.geometry.pitch_mm = 0.0;
   CHECK(message_of([&] { (void)preprocess(f); }).find("pitch_mm = 0") != std::string::npos);
-  CHECK(message_of([&] { (void)preprocess(paper_frame(), {.mm_per_px = -1.0}); })
-            .find("mm_per_px = -1") != std::string::npos);
-  CHECK(message_of([&] { (void)preprocess(paper_frame(), {.mm_per_px = 100.0}); })
-            .find("covers less than one pixel") != std::string::npos);
+  CHECK(message_of([&] {
+          (void)preprocess(paper_frame(), {.mm_per_px = -1.0});
+        }).find("mm_per_px = -1") != std::string::npos);
+  CHECK(message_of([&] {
+          (void)preprocess(paper_frame(), {.mm_per_px = 100.0});
+        }).find("covers less than one pixel") != std::string::npos);
 }

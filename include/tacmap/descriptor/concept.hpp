@@ -2,10 +2,10 @@
 // (paper, Sec. III-C: the same descriptor is extracted from both modalities).
 #pragma once
 
+#include <concepts>
+
 #include "tacmap/grid/concept.hpp"
 #include "tacmap/image.hpp"
-
-#include <concepts>
 
 namespace tacmap {
 
@@ -50,14 +50,13 @@ struct descriptor_field {
 /// };
 /// ```
 template <class D>
-concept descriptor =
-    belief_scalar<typename D::scalar_type> &&
+concept descriptor = belief_scalar<typename D::scalar_type> &&
     requires(const D& d, const image<typename D::scalar_type>& img,
              const Eigen::Ref<const Eigen::Array<typename D::scalar_type, Eigen::Dynamic, 1>>& a) {
-      { d.dimension() } -> std::same_as<Eigen::Index>;
-      { d.patch_size() } -> std::same_as<Eigen::Index>;
-      { d.compute(img) } -> std::same_as<descriptor_field<typename D::scalar_type>>;
-      { d.distance(a, a) } -> std::same_as<typename D::scalar_type>;
-    };
+  { d.dimension() } -> std::same_as<Eigen::Index>;
+  { d.patch_size() } -> std::same_as<Eigen::Index>;
+  { d.compute(img) } -> std::same_as<descriptor_field<typename D::scalar_type>>;
+  { d.distance(a, a) } -> std::same_as<typename D::scalar_type>;
+};
 
 }  // namespace tacmap

@@ -6,18 +6,17 @@
 // for any number of spatial bins and orientations; see reference/dense-sift.md for the facts.
 #pragma once
 
-#include "tacmap/descriptor/concept.hpp"
-#include "tacmap/descriptor/detail/dense_sift_kernels.hpp"
-#include "tacmap/image.hpp"
-
 #include <Eigen/Core>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 #include <vector>
+
+#include "tacmap/descriptor/concept.hpp"
+#include "tacmap/descriptor/detail/dense_sift_kernels.hpp"
+#include "tacmap/image.hpp"
 
 namespace tacmap {
 
@@ -269,9 +268,9 @@ class dense_sift {
     out.spacing = s;
     out.values.resize(descriptor_size, out.rows * out.cols);
     for (Eigen::Index i = 0; i < out.rows; ++i) {
-      const auto rows =
-          bin_rows(pooled.data(), row_size, i * s,
-                   [&slot](Eigen::Index y) { return slot[static_cast<std::size_t>(y)]; });
+      const auto rows = bin_rows(pooled.data(), row_size, i * s, [&slot](Eigen::Index y) {
+        return slot[static_cast<std::size_t>(y)];
+      });
       for (Eigen::Index j = 0; j < out.cols; ++j) {
         assemble(rows, j * s, out.values.col(i * out.cols + j).data());
       }
@@ -284,9 +283,9 @@ class dense_sift {
   /// `std::invalid_argument` when a column's length is not `dimension()`.
   [[nodiscard]] T distance(column a, column b) const {
     if (a.size() != descriptor_size || b.size() != descriptor_size) {
-      detail::fail<std::invalid_argument>(
-          "dense_sift::distance: descriptors of length ", a.size(), " and ", b.size(),
-          " given, expected ", descriptor_size, " each; pass columns of this descriptor's output");
+      detail::fail<std::invalid_argument>("dense_sift::distance: descriptors of length ", a.size(),
+                                          " and ", b.size(), " given, expected ", descriptor_size,
+                                          " each; pass columns of this descriptor's output");
     }
     return (a - b).matrix().norm();
   }
@@ -301,14 +300,17 @@ class dense_sift {
     }
     if (p.patch_size % NumBins != 0) {
       fail<std::invalid_argument>(
-          "dense_sift: patch_size = ", p.patch_size, " px is not a multiple of num_bins = ",
-          NumBins, ", so the spatial bins would not have a whole number of pixels; use a multiple"
-          " of ", NumBins, " (default_params() gives ", default_params().patch_size, ")");
+          "dense_sift: patch_size = ", p.patch_size,
+          " px is not a multiple of num_bins = ", NumBins,
+          ", so the spatial bins would not have a whole number of pixels; use a multiple"
+          " of ",
+          NumBins, " (default_params() gives ", default_params().patch_size, ")");
     }
     if (p.patch_size % 2 != 0) {
       fail<std::invalid_argument>("dense_sift: patch_size = ", p.patch_size,
                                   " px is odd; the grid starts at patch_size / 2, so use an "
-                                  "even multiple of num_bins = ", NumBins);
+                                  "even multiple of num_bins = ",
+                                  NumBins);
     }
     if (p.grid_spacing <= 0) {
       fail<std::invalid_argument>("dense_sift: grid_spacing = ", p.grid_spacing,
@@ -357,9 +359,8 @@ class dense_sift {
     Eigen::Array<T, Eigen::Dynamic, 1> gx;
     Eigen::Array<T, Eigen::Dynamic, 1> gy;
     const Eigen::Index stride = detail::dsift::gradients(img, scale, gradient_, gx, gy);
-    detail::dsift::orientation_channels<NumAngles>(gx, gy, img.rows(), img.cols(), stride,
-                                                   margin(), cos_a_, sin_a_, params_.alpha,
-                                                   channels);
+    detail::dsift::orientation_channels<NumAngles>(gx, gy, img.rows(), img.cols(), stride, margin(),
+                                                   cos_a_, sin_a_, params_.alpha, channels);
   }
 
   /// Zero pixels around the channels: the pooling taps reach patch/2 px from a sample point.

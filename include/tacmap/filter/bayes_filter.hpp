@@ -8,16 +8,16 @@
 // knowledge of where the sensor is (Sec. III-A); `set_prior` takes a user prior instead.
 #pragma once
 
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <utility>
+
 #include "tacmap/filter/detail/posterior_kernel.hpp"
 #include "tacmap/grid/concept.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/measurement/concept.hpp"
 #include "tacmap/motion/concept.hpp"
-
-#include <cmath>
-#include <limits>
-#include <stdexcept>
-#include <utility>
 
 namespace tacmap {
 
@@ -26,12 +26,12 @@ template <int Dimension>
 struct state_estimate {
   using vector_type = Eigen::Matrix<double, Dimension, 1>;
   using matrix_type = Eigen::Matrix<double, Dimension, Dimension>;
-  Eigen::Index map_index = 0;        ///< index of the most probable state (MAP)
-  vector_type map_mm;                ///< the MAP state's coordinates
-  double map_probability = 0.0;      ///< its posterior probability
-  vector_type mean_mm;               ///< posterior mean
-  matrix_type covariance_mm2;        ///< posterior covariance
-  double entropy_nats = 0.0;         ///< -sum p log p: 0 when certain, log(N) when uniform
+  Eigen::Index map_index = 0;    ///< index of the most probable state (MAP)
+  vector_type map_mm;            ///< the MAP state's coordinates
+  double map_probability = 0.0;  ///< its posterior probability
+  vector_type mean_mm;           ///< posterior mean
+  matrix_type covariance_mm2;    ///< posterior covariance
+  double entropy_nats = 0.0;     ///< -sum p log p: 0 when certain, log(N) when uniform
 };
 
 /// What one measurement update reports.
@@ -70,7 +70,8 @@ class bayes_filter {
                   "a state_grid's size must be a positive multiple of rows * cols");
     // State coordinates are fixed for the filter's life: cache them (relative to the first
     // state, which keeps them small) so estimate() is two matrix products, not N grid calls.
-    for (Eigen::Index i = 0; i < grid_.size(); ++i) offsets_mm_.col(i) = grid_.state_mm(i) - origin_mm_;
+    for (Eigen::Index i = 0; i < grid_.size(); ++i)
+      offsets_mm_.col(i) = grid_.state_mm(i) - origin_mm_;
     reset();
   }
 
@@ -146,8 +147,8 @@ class bayes_filter {
       Eigen::Map<image<scalar_type>>(log_likelihood_.data(), grid_.rows(), grid_.cols()) =
           log_likelihood.derived().template cast<scalar_type>();
     } else {
-      detail::fail("bayes_filter::update_log_likelihood: log-likelihood is ",
-                   log_likelihood.rows(), " x ", log_likelihood.cols(), "; expected ", n,
+      detail::fail("bayes_filter::update_log_likelihood: log-likelihood is ", log_likelihood.rows(),
+                   " x ", log_likelihood.cols(), "; expected ", n,
                    " x 1 (one value per state) or the belief image ", grid_.rows(), " x ",
                    grid_.cols());
     }
@@ -226,7 +227,8 @@ class bayes_filter {
     if (!(total > 0.0) || !std::isfinite(total))
       detail::fail<std::domain_error>(
           "bayes_filter::update: ", source, " gives zero probability to every state the belief ",
-          "still allows (posterior sum ", total, "); the measurement contradicts the prediction. "
+          "still allows (posterior sum ", total,
+          "); the measurement contradicts the prediction. "
           "The belief is unchanged; call reset() to start again from a uniform belief");
     scratch_ *= static_cast<scalar_type>(1.0 / total);
     belief_.swap(scratch_);

@@ -1,12 +1,11 @@
 // tacmap: the `state_grid` concept — the set of candidate sensor poses the filter reasons over.
 #pragma once
 
-#include "tacmap/config.hpp"
-
 #include <Eigen/Core>
-
 #include <concepts>
 #include <type_traits>
+
+#include "tacmap/config.hpp"
 
 namespace tacmap {
 
@@ -42,16 +41,16 @@ concept belief_scalar = std::same_as<T, float> || std::same_as<T, double>;
 /// };
 /// ```
 template <class G>
-concept state_grid =
-    std::copy_constructible<G> && belief_scalar<typename G::scalar_type> &&
-    std::same_as<std::remove_cvref_t<decltype(G::dimension)>, int> && (G::dimension > 0) &&
-    std::same_as<typename G::state_type, Eigen::Matrix<double, G::dimension, 1>> &&
-    requires(const G& g, Eigen::Index i) {
-      { g.rows() } -> std::same_as<Eigen::Index>;
-      { g.cols() } -> std::same_as<Eigen::Index>;
-      { g.size() } -> std::same_as<Eigen::Index>;
-      { g.state_mm(i) } -> std::same_as<typename G::state_type>;
-    };
+concept state_grid = std::copy_constructible<G> && belief_scalar<typename G::scalar_type> &&
+                     std::same_as < std::remove_cvref_t<decltype(G::dimension)>,
+int > &&(G::dimension > 0) &&
+    std::same_as<typename G::state_type, Eigen::Matrix<double, G::dimension, 1>>&& requires(
+        const G& g, Eigen::Index i) {
+  { g.rows() } -> std::same_as<Eigen::Index>;
+  { g.cols() } -> std::same_as<Eigen::Index>;
+  { g.size() } -> std::same_as<Eigen::Index>;
+  { g.state_mm(i) } -> std::same_as<typename G::state_type>;
+};
 
 /// The flat belief (or log-likelihood) array over a grid: one value per state, layer after
 /// layer, each layer a row-major `rows() x cols()` image.

@@ -15,12 +15,12 @@
 //    Paper's case: map 120 x 120, window 18 wide x 42 tall -> 79 x 103 = 8,137 states.
 #pragma once
 
-#include "tacmap/grid/concept.hpp"
-#include "tacmap/image.hpp"
-
 #include <cmath>
 #include <optional>
 #include <stdexcept>
+
+#include "tacmap/grid/concept.hpp"
+#include "tacmap/image.hpp"
 
 namespace tacmap {
 

@@ -1,9 +1,9 @@
 // tacmap: the `measurement_model` concept — the measurement update's p(z_t | x_t) (Table 1).
 #pragma once
 
-#include "tacmap/grid/concept.hpp"
-
 #include <concepts>
+
+#include "tacmap/grid/concept.hpp"
 
 namespace tacmap {
 
@@ -34,10 +34,9 @@ namespace tacmap {
 /// };
 /// ```
 template <class M, class G>
-concept measurement_model =
-    state_grid<G> && requires(const M& m, const G& g, const typename M::measurement_type& z,
-                              belief_array<G>& out) {
-      { m.log_likelihood(g, z, out) } -> std::same_as<void>;
-    };
+concept measurement_model = state_grid<G> &&
+    requires(const M& m, const G& g, const typename M::measurement_type& z, belief_array<G>& out) {
+  { m.log_likelihood(g, z, out) } -> std::same_as<void>;
+};
 
 }  // namespace tacmap

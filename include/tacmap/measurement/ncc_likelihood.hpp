@@ -12,12 +12,12 @@
 // multiply-add per tactile pixel (h w block operations over the grid, no per-window loop).
 #pragma once
 
+#include <cmath>
+#include <stdexcept>
+
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/measurement/concept.hpp"
-
-#include <cmath>
-#include <stdexcept>
 
 namespace tacmap {
 
@@ -46,8 +46,9 @@ class ncc_likelihood {
       : params_(params), window_(window) {
     params.validate();
     if (!detail::all_finite(map))
-      detail::fail("ncc_likelihood: the map contains NaN or infinite pixels; expected a finite "
-                   "image");
+      detail::fail(
+          "ncc_likelihood: the map contains NaN or infinite pixels; expected a finite "
+          "image");
     if (window.width <= 0 || window.height <= 0 || map.cols() < window.width ||
         map.rows() < window.height)
       detail::fail("ncc_likelihood: the map is ", map.cols(), " x ", map.rows(),
@@ -83,9 +84,8 @@ class ncc_likelihood {
   /// log p(z | x) for every window (see the file comment). Throws std::invalid_argument when z
   /// is not the window's size or holds NaN, or when the grid is not the one the map was built for.
   template <class G>
-  void log_likelihood(const G& grid, const measurement_type& z, belief_array<G>& out) const
-    requires std::same_as<typename G::scalar_type, T>
-  {
+  void log_likelihood(const G& grid, const measurement_type& z, belief_array<G>& out)
+      const requires std::same_as<typename G::scalar_type, T> {
     if (grid.rows() != inv_norm_.rows() || grid.cols() != inv_norm_.cols())
       detail::fail("ncc_likelihood: the grid has ", grid.rows(), " x ", grid.cols(),
                    " states but the map and window give ", inv_norm_.rows(), " x ",

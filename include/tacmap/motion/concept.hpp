@@ -1,9 +1,9 @@
 // tacmap: the `motion_model` concept — the control update of the Bayes filter (paper, Table 1).
 #pragma once
 
-#include "tacmap/grid/concept.hpp"
-
 #include <concepts>
+
+#include "tacmap/grid/concept.hpp"
 
 namespace tacmap {
 
@@ -38,10 +38,10 @@ struct prediction_report {
 /// };
 /// ```
 template <class M, class G>
-concept motion_model =
-    state_grid<G> && requires(const M& m, const G& g, const belief_array<G>& in,
-                              belief_array<G>& out, const typename M::control_type& u) {
-      { m.predict(g, in, out, u) } -> std::same_as<prediction_report>;
-    };
+concept motion_model = state_grid<G> &&
+    requires(const M& m, const G& g, const belief_array<G>& in, belief_array<G>& out,
+             const typename M::control_type& u) {
+  { m.predict(g, in, out, u) } -> std::same_as<prediction_report>;
+};
 
 }  // namespace tacmap

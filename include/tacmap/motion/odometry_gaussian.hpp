@@ -25,10 +25,6 @@
 // model throws std::domain_error and the filter keeps its previous belief.
 #pragma once
 
-#include "tacmap/grid/concept.hpp"
-#include "tacmap/image.hpp"
-#include "tacmap/motion/concept.hpp"
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -36,6 +32,10 @@
 #include <stdexcept>
 #include <type_traits>
 #include <vector>
+
+#include "tacmap/grid/concept.hpp"
+#include "tacmap/image.hpp"
+#include "tacmap/motion/concept.hpp"
 
 namespace tacmap {
 
@@ -53,8 +53,8 @@ enum class off_grid {
 
 /// Configuration of `odometry_gaussian`. Defaults are the paper's k = 8 with sigma 1 mm.
 struct odometry_gaussian_params {
-  double sigma_mm = 1.0;               ///< standard deviation of the motion noise, per axis
-  int k = 8;                           ///< neighbours of each state the noise spreads over
+  double sigma_mm = 1.0;  ///< standard deviation of the motion noise, per axis
+  int k = 8;              ///< neighbours of each state the noise spreads over
   off_grid boundary = off_grid::renormalize;
 };
 
@@ -101,8 +101,8 @@ void shifted_accumulate(const Eigen::Map<const image<T>>& in, Eigen::Map<image<T
   };
   const auto split = [](Eigen::Index n, Eigen::Index o) {
     std::array<segment, 3> s{};
-    const Eigen::Index lo = std::clamp<Eigen::Index>(-o, 0, n);       // sources with dst < 0
-    const Eigen::Index hi = std::clamp<Eigen::Index>(n - o, lo, n);   // first source with dst >= n
+    const Eigen::Index lo = std::clamp<Eigen::Index>(-o, 0, n);      // sources with dst < 0
+    const Eigen::Index hi = std::clamp<Eigen::Index>(n - o, lo, n);  // first source with dst >= n
     s[0] = {0, 0, lo, true};
     s[1] = {lo, lo + o, hi - lo, false};
     s[2] = {hi, n - 1, n - hi, true};
@@ -152,7 +152,8 @@ class odometry_gaussian {
       for (std::size_t i = 0; i < 8 && i < counts.size(); ++i) list << counts[i] << ", ";
       detail::fail("odometry_gaussian: k = ", params.k,
                    " neighbours is not supported; expected a count that selects a whole disc of "
-                   "neighbouring states (", list.str(), "... up to ", counts.back(),
+                   "neighbouring states (",
+                   list.str(), "... up to ", counts.back(),
                    "); the paper uses k = 8 (the 3 x 3 neighbourhood)");
     }
     for (int oy = -detail::max_stencil_radius; oy <= detail::max_stencil_radius; ++oy)
@@ -232,13 +233,15 @@ class odometry_gaussian {
       for (int t = 0; t < 2 * radius_ + 2; ++t) {
         const double w = wx[static_cast<std::size_t>(t)];
         if (w > 0.0)
-          detail::shifted_accumulate(in_img, tmp_img, 0, ix + t - radius_, static_cast<T>(w), clamp);
+          detail::shifted_accumulate(in_img, tmp_img, 0, ix + t - radius_, static_cast<T>(w),
+                                     clamp);
       }
       out.setZero();
       for (int t = 0; t < 2 * radius_ + 2; ++t) {
         const double w = wy[static_cast<std::size_t>(t)];
         if (w > 0.0)
-          detail::shifted_accumulate(tmp_in, out_img, iy + t - radius_, 0, static_cast<T>(w), clamp);
+          detail::shifted_accumulate(tmp_in, out_img, iy + t - radius_, 0, static_cast<T>(w),
+                                     clamp);
       }
     } else {
       // Any other disc: composite stencil = Gaussian (k + 1 taps) convolved with the bilinear

@@ -341,7 +341,10 @@ inline constexpr double footprint_tolerance_mm = 1e-6;  // as tactile_simulator:
                    "on line ",
                    it->second.line, "); expected each key once");
     std::string value(line.fields[2]);
-    for (std::size_t i = 3; i < line.fields.size(); ++i) value += " " + std::string(line.fields[i]);
+    for (std::size_t i = 3; i < line.fields.size(); ++i) {
+      value += ' ';  // appended piecewise: `" " + std::string` trips GCC 12's -Wrestrict at -O2
+      value += line.fields[i];
+    }
     keys.emplace(std::string(key), entry{std::move(value), line.number});
   }
   const auto required = [&](const char* key) -> const entry& {

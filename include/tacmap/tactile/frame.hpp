@@ -4,19 +4,19 @@
 // The geometry comes with every frame, so nothing downstream hard-codes the paper's 14 x 6.
 #pragma once
 
-#include "tacmap/image.hpp"
-
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+
+#include "tacmap/image.hpp"
 
 namespace tacmap {
 
 /// The layout of a tactile array: taxel rows x columns and the centre-to-centre pitch.
 struct taxel_geometry {
-  Eigen::Index rows = 14;        ///< taxels along the sensor's long side (y on the map)
-  Eigen::Index cols = 6;         ///< taxels across (x on the map)
-  double pitch_mm = 3.4;         ///< cell pitch in millimetres (Weiss DSA 9205 / WTS 0614-34A)
+  Eigen::Index rows = 14;  ///< taxels along the sensor's long side (y on the map)
+  Eigen::Index cols = 6;   ///< taxels across (x on the map)
+  double pitch_mm = 3.4;   ///< cell pitch in millimetres (Weiss DSA 9205 / WTS 0614-34A)
   friend bool operator==(const taxel_geometry&, const taxel_geometry&) = default;
 
   /// Throws std::invalid_argument naming the offending field unless the geometry is usable.

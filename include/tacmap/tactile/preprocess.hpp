@@ -9,13 +9,13 @@
 //    the frame; nothing here assumes 14 x 6.
 #pragma once
 
-#include "tacmap/image.hpp"
-#include "tacmap/tactile/frame.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+
+#include "tacmap/image.hpp"
+#include "tacmap/tactile/frame.hpp"
 
 namespace tacmap {
 
@@ -45,16 +45,16 @@ struct preprocess_params {
 
 /// Why a frame was not used.
 enum class frame_rejection {
-  none,           ///< accepted
-  weak_peak,      ///< max < min_peak: no deliberate contact
-  weak_total,     ///< sum < min_total: too little contact area or force
+  none,        ///< accepted
+  weak_peak,   ///< max < min_peak: no deliberate contact
+  weak_total,  ///< sum < min_total: too little contact area or force
 };
 
 /// The outcome of preprocessing one frame. `pixels` is valid only when `accepted()`.
 struct preprocessed_frame {
   frame_rejection rejection = frame_rejection::none;
-  float peak = 0.0F;   ///< the frame's maximum (raw counts)
-  float total = 0.0F;  ///< the frame's sum (raw counts)
+  float peak = 0.0F;    ///< the frame's maximum (raw counts)
+  float total = 0.0F;   ///< the frame's sum (raw counts)
   image<float> pixels;  ///< map-scale tactile image in [0, 1] (rows x cols in map pixels)
 
   [[nodiscard]] bool accepted() const { return rejection == frame_rejection::none; }
@@ -97,10 +97,10 @@ inline image<float> resize_taxels(const image<float>& src, Eigen::Index out_rows
     for (Eigen::Index c = 0; c < out_cols; ++c) {
       const double u = (static_cast<double>(c) + 0.5) * sx - 0.5;
       if (method == resize_method::nearest) {
-        const auto tr = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::lround(v)), 0,
-                                                 src.rows() - 1);
-        const auto tc = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::lround(u)), 0,
-                                                 src.cols() - 1);
+        const auto tr =
+            std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::lround(v)), 0, src.rows() - 1);
+        const auto tc =
+            std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::lround(u)), 0, src.cols() - 1);
         out(r, c) = src(tr, tc);
         continue;
       }
@@ -142,11 +142,13 @@ inline image<float> resize_taxels(const image<float>& src, Eigen::Index out_rows
   }
   const pixel_size window = tactile_window(frame.geometry, params.mm_per_px);
   if (window.width < 1 || window.height < 1)
-    detail::fail("preprocess: a ", frame.geometry.rows, " x ", frame.geometry.cols,
-                 " array at ", frame.geometry.pitch_mm, " mm covers less than one pixel of a map "
-                 "at ", params.mm_per_px, " mm per px; expected a map scale finer than the array");
-  result.pixels = detail::resize_taxels(frame.counts / result.peak, window.height, window.width,
-                                       params.resize);
+    detail::fail("preprocess: a ", frame.geometry.rows, " x ", frame.geometry.cols, " array at ",
+                 frame.geometry.pitch_mm,
+                 " mm covers less than one pixel of a map "
+                 "at ",
+                 params.mm_per_px, " mm per px; expected a map scale finer than the array");
+  result.pixels =
+      detail::resize_taxels(frame.counts / result.peak, window.height, window.width, params.resize);
   return result;
 }
 

@@ -17,17 +17,17 @@
 //    within 5 mm of its window.
 #pragma once
 
-#include "tacmap/descriptor/concept.hpp"
-#include "tacmap/filter/bayes_filter.hpp"
-#include "tacmap/grid/planar_grid.hpp"
-#include "tacmap/measurement/descriptor_likelihood.hpp"
-#include "tacmap/motion/odometry_gaussian.hpp"
-
 #include <doctest/doctest.h>
 
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
+
+#include "tacmap/descriptor/concept.hpp"
+#include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/grid/planar_grid.hpp"
+#include "tacmap/measurement/descriptor_likelihood.hpp"
+#include "tacmap/motion/odometry_gaussian.hpp"
 
 namespace tacmap::testing {
 
@@ -103,8 +103,10 @@ TEST_CASE_TEMPLATE_DEFINE("tacmap descriptor conformance", D, tacmap_descriptor_
     const tacmap::grid_cell truth{9, 13};
     const tacmap::image<float> cut = map.block(truth.row, truth.col, 42, 18);
     // The paper's configuration (all pairs, eq. (2)): any touch leaves a proper posterior.
-    tacmap::bayes_filter paper(grid, tacmap::odometry_gaussian{},
-                               tacmap::descriptor_likelihood<D>(D{}, map, grid.window_size()));
+    tacmap::bayes_filter paper(
+        grid, tacmap::odometry_gaussian{},
+        tacmap::descriptor_likelihood<D>(D{}, map, grid.window_size(),
+                                         tacmap::descriptor_likelihood_params::paper()));
     paper.update(cut);
     CHECK(static_cast<double>(paper.belief().sum()) == doctest::Approx(1.0).epsilon(1e-4));
     CHECK(paper.belief().allFinite());

@@ -6,10 +6,7 @@
 // dense_sift.hpp for the user-facing description.
 #pragma once
 
-#include "tacmap/image.hpp"
-
 #include <Eigen/Core>
-
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -18,6 +15,8 @@
 #include <type_traits>
 #include <utility>
 #include <vector>
+
+#include "tacmap/image.hpp"
 
 namespace tacmap::detail::dsift {
 
@@ -89,8 +88,7 @@ template <class T>
 std::vector<pooling_tap<T>> make_pooling_taps(Eigen::Index patch, Eigen::Index bin) {
   std::vector<pooling_tap<T>> taps;
   for (Eigen::Index d = 1 - patch / 2; d <= patch / 2; ++d) {
-    const double w =
-        1.0 - std::abs(static_cast<double>(d) - 1.5) / static_cast<double>(bin);
+    const double w = 1.0 - std::abs(static_cast<double>(d) - 1.5) / static_cast<double>(bin);
     if (w > 0.0) taps.push_back({d, static_cast<T>(w)});
   }
   return taps;

@@ -7,12 +7,11 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <xsimd/xsimd.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <xsimd/xsimd.hpp>
 
 namespace tacmap::detail {
 
@@ -92,7 +91,8 @@ double weight_by_likelihood(const T* prior, const T* ll, T top, T* out, Eigen::I
   batch sum(T(0));
   for (Eigen::Index i = 0; i < vec_end; i += width) {
     const batch d = batch::load_unaligned(ll + i) - top_b;
-    const batch w = xsimd::select(d < floor, zero, batch::load_unaligned(prior + i) * xsimd::exp(d));
+    const batch w =
+        xsimd::select(d < floor, zero, batch::load_unaligned(prior + i) * xsimd::exp(d));
     w.store_unaligned(out + i);
     sum += w;
   }

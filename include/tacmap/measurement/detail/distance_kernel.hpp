@@ -11,11 +11,10 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <xsimd/xsimd.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <vector>
+#include <xsimd/xsimd.hpp>
 
 namespace tacmap::detail {
 

@@ -1,0 +1,111 @@
+// tacmap: colour PNG output for figures (demo, evaluation): `rgb_image` and `write_png_rgb`.
+//
+// Same encoder as io/image_io.hpp's grey `encode_png` (stored deflate blocks, no compression,
+// no dependency), with three 8-bit channels (PNG colour type 2).
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include "tacmap/image.hpp"
+#include "tacmap/io/image_io.hpp"
+
+namespace tacmap {
+
+/// A colour image: three channels of the same size, intensities in [0, 1].
+struct rgb_image {
+  image<float> r, g, b;
+
+  /// A `rows` x `cols` image filled with one colour.
+  [[nodiscard]] static rgb_image filled(Eigen::Index rows, Eigen::Index cols, float red,
+                                        float green, float blue) {
+    return {image<float>::Constant(rows, cols, red), image<float>::Constant(rows, cols, green),
+            image<float>::Constant(rows, cols, blue)};
+  }
+  [[nodiscard]] Eigen::Index rows() const { return r.rows(); }
+  [[nodiscard]] Eigen::Index cols() const { return r.cols(); }
+  /// Sets pixel (row, col) when it lies inside the image; ignores it otherwise (drawing helpers
+  /// may clip at the border).
+  void set(Eigen::Index row, Eigen::Index col, float red, float green, float blue) {
+    if (row < 0 || col < 0 || row >= rows() || col >= cols()) return;
+    r(row, col) = red;
+    g(row, col) = green;
+    b(row, col) = blue;
+  }
+};
+
+/// 8-bit RGB PNG bytes of `img`. Throws std::invalid_argument when the channels differ in size,
+/// are empty or hold non-finite values (values outside [0, 1] are clamped).
+[[nodiscard]] inline std::string encode_png_rgb(const rgb_image& img) {
+  using detail::image_io::put_be32;
+  using detail::image_io::to_byte;
+  if (img.g.rows() != img.r.rows() || img.g.cols() != img.r.cols() ||
+      img.b.rows() != img.r.rows() || img.b.cols() != img.r.cols())
+    detail::fail("encode_png_rgb: channel sizes differ (red ", img.r.rows(), " x ", img.r.cols(),
+                 ", green ", img.g.rows(), " x ", img.g.cols(), ", blue ", img.b.rows(), " x ",
+                 img.b.cols(), "); expected three channels of the same size");
+  detail::image_io::check_writable(img.r, "encode_png_rgb (red)");
+  detail::image_io::check_writable(img.g, "encode_png_rgb (green)");
+  detail::image_io::check_writable(img.b, "encode_png_rgb (blue)");
+  std::string raw;
+  raw.reserve(static_cast<std::size_t>(img.rows() * (3 * img.cols() + 1)));
+  for (Eigen::Index row = 0; row < img.rows(); ++row) {
+    raw.push_back('\0');  // filter type 0 (none)
+    for (Eigen::Index col = 0; col < img.cols(); ++col) {
+      raw.push_back(static_cast<char>(to_byte(img.r(row, col))));
+      raw.push_back(static_cast<char>(to_byte(img.g(row, col))));
+      raw.push_back(static_cast<char>(to_byte(img.b(row, col))));
+    }
+  }
+  // zlib stream: header, stored blocks of up to 65535 bytes, Adler-32 trailer (RFC 1950/1951).
+  std::string z = "\x78\x01";
+  for (std::size_t pos = 0;;) {
+    const std::size_t len = std::min<std::size_t>(65535, raw.size() - pos);
+    const bool last = pos + len >= raw.size();
+    z.push_back(last ? '\x01' : '\x00');
+    const auto n = static_cast<std::uint16_t>(len);
+    const auto nn = static_cast<std::uint16_t>(~n);
+    z.push_back(static_cast<char>(n & 0xFFU));
+    z.push_back(static_cast<char>(n >> 8U));
+    z.push_back(static_cast<char>(nn & 0xFFU));
+    z.push_back(static_cast<char>(nn >> 8U));
+    z.append(raw, pos, len);
+    pos += len;
+    if (last) break;
+  }
+  std::uint32_t a = 1;
+  std::uint32_t b = 0;
+  for (const char ch : raw) {
+    a = (a + static_cast<std::uint8_t>(ch)) % 65521U;
+    b = (b + a) % 65521U;
+  }
+  put_be32(z, (b << 16U) | a);
+
+  std::string out = "\x89PNG\r\n\x1a\n";
+  const auto chunk = [&](std::string_view type, const std::string& data) {
+    put_be32(out, static_cast<std::uint32_t>(data.size()));
+    std::string body(type);
+    body += data;
+    out += body;
+    put_be32(out, detail::image_io::crc32(body));
+  };
+  std::string ihdr;
+  put_be32(ihdr, static_cast<std::uint32_t>(img.cols()));
+  put_be32(ihdr, static_cast<std::uint32_t>(img.rows()));
+  ihdr += std::string("\x08\x02\x00\x00\x00", 5);  // 8 bit, RGB, deflate, filter 0, no interlace
+  chunk("IHDR", ihdr);
+  chunk("IDAT", z);
+  chunk("IEND", {});
+  return out;
+}
+
+/// Writes `img` as an 8-bit RGB PNG (see `encode_png_rgb`); std::runtime_error when the file
+/// cannot be written.
+inline void write_png_rgb(const std::filesystem::path& path, const rgb_image& img) {
+  detail::image_io::write_file(path, encode_png_rgb(img), "write_png_rgb");
+}
+
+}  // namespace tacmap

@@ -1,0 +1,298 @@
+// tacmap: experiments — one touch protocol run through the whole localization pipeline, and the
+// paper's metrics (Sec. IV-B, Figs. 5-8).
+//
+// A run replays one sequence of a `touch_protocol` on its map: at every step the tactile
+// simulator renders a (noisy) frame at the TRUE location, `preprocess` turns it into a map-scale
+// tactile image, the filter predicts with the MEASURED odometry (what the arm reported, Sec.
+// III-B) and updates with the image (Sec. III-C). The true location is only used to score the
+// estimate. A frame that `preprocess` rejects is reported and skips the update (the prediction
+// still happens: the arm did move).
+//
+// Metrics, as the paper counts them (Sec. IV-B): a sequence is *localized* when the MAP error is
+// below 5 mm by touch 6 and stays below for every later touch; its *touches to localize* is the
+// first touch (1-based) from which the error stays below the threshold; Fig. 6 plots the error
+// per touch across the 22 sequences (we report the median).
+//
+// `localization_experiment` builds the (expensive: per-window descriptors of every window)
+// measurement model once per map and configuration and reuses it for every sequence by resetting
+// the filter.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <string>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/grid/planar_grid.hpp"
+#include "tacmap/image.hpp"
+#include "tacmap/measurement/descriptor_likelihood.hpp"
+#include "tacmap/measurement/ncc_likelihood.hpp"
+#include "tacmap/motion/odometry_gaussian.hpp"
+#include "tacmap/sim/protocol.hpp"
+#include "tacmap/sim/random.hpp"
+#include "tacmap/sim/tactile_simulator.hpp"
+#include "tacmap/tactile/preprocess.hpp"
+
+namespace tacmap {
+
+/// Which measurement model localizes.
+enum class measurement_kind {
+  lite,  ///< "sift_lite": the paper's 2 x 2 x 8 dense SIFT with eq. (1)-(2) (descriptor_likelihood)
+  classic,  ///< "classic_sift": 4 x 4 x 8 dense SIFT, same eq. (1)-(2)
+  ncc,      ///< "ncc": normalised cross-correlation baseline (ncc_likelihood)
+};
+
+[[nodiscard]] inline const char* to_string(measurement_kind k) {
+  switch (k) {
+    case measurement_kind::lite:
+      return "sift_lite";
+    case measurement_kind::classic:
+      return "classic_sift";
+    case measurement_kind::ncc:
+      return "ncc";
+  }
+  return "?";
+}
+[[nodiscard]] inline const char* to_string(pairing p) {
+  return p == pairing::all_pairs ? "all_pairs" : "aligned";
+}
+[[nodiscard]] inline const char* to_string(likelihood_shape s) {
+  return s == likelihood_shape::inverse ? "inverse" : "exponential";
+}
+[[nodiscard]] inline const char* to_string(window_features f) {
+  return f == window_features::per_window ? "per_window" : "shared_dense";
+}
+
+/// Everything that configures one localization run. Defaults: the paper's choices (SIFT-lite,
+/// all pairs, eq. (2), per-window features, odometry noise sigma 1 mm over k = 8 neighbours).
+struct localization_config {
+  // Defaults: the best descriptor configuration measured (README, "Localization results").
+  measurement_kind model = measurement_kind::classic;
+  pairing pairs = pairing::aligned;                        ///< descriptor models only
+  likelihood_shape shape = likelihood_shape::exponential;  ///< descriptor models only
+  window_features features = window_features::per_window;  ///< descriptor models only
+  /// Temperature: exponential shape (descriptor distance units) or NCC (log p = ncc / tau).
+  /// Empty: the model's own default (descriptor 1.0, NCC 0.1).
+  std::optional<double> tau;
+  double tempering = 1.0;            ///< exponent on the likelihood
+  double motion_sigma_mm = 1.0;      ///< odometry_gaussian sigma (Sec. III-B)
+  int motion_k = 8;                  ///< odometry_gaussian neighbours (paper: 8)
+  std::uint64_t simulator_seed = 1;  ///< seeds the simulator; each sequence forks its own stream
+  simulator_params simulator{};  ///< the simulator's physics (its seed is replaced per sequence)
+  preprocess_params preprocessing{};  ///< thresholds; mm_per_px is replaced by the map's
+
+  /// A short name for tables: "sift_lite/all_pairs/inverse/per_window".
+  [[nodiscard]] std::string name() const {
+    if (model == measurement_kind::ncc) return "ncc";
+    return std::string(to_string(model)) + "/" + to_string(pairs) + "/" + to_string(shape) + "/" +
+           to_string(features);
+  }
+};
+
+/// What happened at one touch.
+struct touch_record {
+  std::size_t step = 0;      ///< 0-based position in the sequence (touch number - 1)
+  std::size_t location = 0;  ///< index of the touch location
+  double true_x_mm = 0.0;    ///< ground truth sensor centre
+  double true_y_mm = 0.0;
+  double map_x_mm = 0.0;  ///< the belief's most probable state after this touch
+  double map_y_mm = 0.0;
+  double error_mm = 0.0;      ///< distance between the two
+  double entropy_nats = 0.0;  ///< the belief's entropy after this touch
+  bool accepted = true;       ///< false: preprocess rejected the frame, no update
+  frame_rejection rejection = frame_rejection::none;
+};
+
+/// One sequence's run. The images are filled only when asked for (`keep_images`).
+struct sequence_result {
+  std::size_t sequence = 0;
+  std::vector<touch_record> touches;
+  std::vector<image<float>> tactile_images;  ///< preprocessed, map scale (empty when rejected)
+  std::vector<image<float>> beliefs;         ///< belief image after each touch
+};
+
+/// First touch (1-based) from which every error is below `threshold_mm`; empty when the last
+/// touch is not below it (or there are no touches).
+[[nodiscard]] inline std::optional<std::size_t> touches_to_localize(
+    const std::vector<touch_record>& touches, double threshold_mm = 5.0) {
+  std::optional<std::size_t> first;
+  for (std::size_t i = 0; i < touches.size(); ++i) {
+    if (touches[i].error_mm < threshold_mm) {
+      if (!first) first = i + 1;
+    } else {
+      first.reset();
+    }
+  }
+  return first;
+}
+
+/// The paper's success (Sec. IV-B): error below `threshold_mm` by touch `within` and below it for
+/// every later touch.
+[[nodiscard]] inline bool localized(const std::vector<touch_record>& touches,
+                                    double threshold_mm = 5.0, std::size_t within = 6) {
+  const auto t = touches_to_localize(touches, threshold_mm);
+  return t.has_value() && *t <= within;
+}
+
+/// Median of `values` (mean of the middle two for an even count); NaN when empty.
+[[nodiscard]] inline double median(std::vector<double> values) {
+  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const auto mid = static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  const double upper = values[static_cast<std::size_t>(mid)];
+  if (values.size() % 2 == 1) return upper;
+  const double lower = *std::max_element(values.begin(), values.begin() + mid);
+  return 0.5 * (lower + upper);
+}
+
+/// Median error at each touch across sequences (Fig. 6): element t is the median of the errors
+/// at touch t + 1 over the sequences that have one.
+[[nodiscard]] inline std::vector<double> median_error_per_touch(
+    const std::vector<sequence_result>& results) {
+  std::size_t longest = 0;
+  for (const auto& r : results) longest = std::max(longest, r.touches.size());
+  std::vector<double> out;
+  for (std::size_t t = 0; t < longest; ++t) {
+    std::vector<double> at;
+    for (const auto& r : results)
+      if (t < r.touches.size()) at.push_back(r.touches[t].error_mm);
+    out.push_back(median(std::move(at)));
+  }
+  return out;
+}
+
+/// A measurement model chosen at run time from `localization_config::model`: the three shipped
+/// models behind one `log_likelihood`, so one filter type serves every configuration.
+class configured_measurement {
+ public:
+  using measurement_type = image<float>;
+
+  configured_measurement(const localization_config& config, const image<float>& map,
+                         pixel_size window)
+      : model_(make(config, map, window)) {}
+
+  template <class G>
+  void log_likelihood(const G& grid, const measurement_type& z, belief_array<G>& out) const {
+    std::visit([&](const auto& m) { m.log_likelihood(grid, z, out); }, model_);
+  }
+
+ private:
+  using variant_type = std::variant<ncc_likelihood<float>, descriptor_likelihood<sift_lite>,
+                                    descriptor_likelihood<classic_sift>>;
+
+  static variant_type make(const localization_config& config, const image<float>& map,
+                           pixel_size window) {
+    if (config.model == measurement_kind::ncc) {
+      ncc_params p;
+      if (config.tau) p.tau = *config.tau;
+      p.tempering = config.tempering;
+      return variant_type(std::in_place_index<0>, map, window, p);
+    }
+    descriptor_likelihood_params p;
+    p.pairs = config.pairs;
+    p.shape = config.shape;
+    p.features = config.features;
+    if (config.tau) p.tau = *config.tau;
+    p.tempering = config.tempering;
+    if (config.model == measurement_kind::lite)
+      return variant_type(std::in_place_index<1>, sift_lite{}, map, window, p);
+    return variant_type(std::in_place_index<2>, classic_sift{}, map, window, p);
+  }
+
+  variant_type model_;
+};
+
+/// One map and one configuration: the grid, the filter (with its measurement model built once)
+/// and the simulator's relief. `run` replays a sequence from a uniform belief.
+class localization_experiment {
+ public:
+  using filter_type = bayes_filter<planar_grid<float>, odometry_gaussian, configured_measurement>;
+
+  /// Throws std::invalid_argument for a protocol whose map is empty or smaller than the sensor's
+  /// window, or for out-of-range configuration values (named by the component that checks them).
+  localization_experiment(const touch_protocol& protocol, localization_config config)
+      : protocol_(&protocol),
+        config_(std::move(config)),
+        window_(checked_window(protocol, config_)),
+        relief_(protocol.relief_mm()),
+        filter_(planar_grid<float>(protocol.map_size(), protocol.mm_per_px, window_),
+                odometry_gaussian({.sigma_mm = config_.motion_sigma_mm, .k = config_.motion_k}),
+                configured_measurement(config_, protocol.map, window_)) {
+    config_.preprocessing.mm_per_px = protocol.mm_per_px;
+  }
+
+  [[nodiscard]] const localization_config& config() const { return config_; }
+  [[nodiscard]] const filter_type& filter() const { return filter_; }
+
+  /// Replays sequence `index` of the protocol. `keep_images`: also return every preprocessed
+  /// tactile image and belief image. Throws std::invalid_argument for an index out of range.
+  [[nodiscard]] sequence_result run(std::size_t index, bool keep_images = false) {
+    if (index >= protocol_->sequences.size())
+      detail::fail("localization_experiment::run: sequence ", index,
+                   " does not exist; expected 0 .. ",
+                   protocol_->sequences.size() == 0 ? 0 : protocol_->sequences.size() - 1,
+                   " (the protocol has ", protocol_->sequences.size(), " sequences)");
+    const touch_sequence& sequence = protocol_->sequences[index];
+    // Each sequence gets its own noise stream, fixed by (seed, index): runs are reproducible
+    // whatever order or subset of sequences is run.
+    simulator_params sp = config_.simulator;
+    std::uint64_t s = config_.simulator_seed ^ (0x9E3779B97F4A7C15ULL * (index + 1));
+    sp.seed = splitmix64(s);
+    tactile_simulator simulator(relief_, protocol_->map_size(), protocol_->mm_per_px, sp);
+
+    filter_.reset();
+    sequence_result result;
+    result.sequence = index;
+    for (std::size_t step = 0; step < sequence.size(); ++step) {
+      const protocol_step& st = sequence[step];
+      const touch_location& truth = protocol_->locations.at(st.location);
+      if (step > 0) filter_.predict(st.measured_motion);
+      const preprocessed_frame pre =
+          preprocess(simulator.render(truth.pose()), config_.preprocessing);
+      touch_record rec;
+      rec.step = step;
+      rec.location = st.location;
+      rec.true_x_mm = truth.x_mm;
+      rec.true_y_mm = truth.y_mm;
+      rec.accepted = pre.accepted();
+      rec.rejection = pre.rejection;
+      if (rec.accepted) filter_.update(pre.pixels);
+      const auto est = filter_.estimate();
+      rec.map_x_mm = est.map_mm(0);
+      rec.map_y_mm = est.map_mm(1);
+      rec.error_mm = std::hypot(rec.map_x_mm - truth.x_mm, rec.map_y_mm - truth.y_mm);
+      rec.entropy_nats = est.entropy_nats;
+      result.touches.push_back(rec);
+      if (keep_images) {
+        result.tactile_images.push_back(rec.accepted ? pre.pixels : image<float>{});
+        result.beliefs.push_back(filter_.belief_image());
+      }
+    }
+    return result;
+  }
+
+ private:
+  static pixel_size checked_window(const touch_protocol& p, const localization_config& c) {
+    const pixel_size w = tactile_window(c.simulator.geometry, p.mm_per_px);
+    if (p.map.cols() < w.width || p.map.rows() < w.height)
+      detail::fail("localization_experiment: the map is ", p.map.cols(), " x ", p.map.rows(),
+                   " px (width x height) but the sensor covers ", w.width, " x ", w.height,
+                   " px at ", p.mm_per_px, " mm per px; expected a map at least the sensor's size");
+    return w;
+  }
+
+  const touch_protocol* protocol_;
+  localization_config config_;
+  pixel_size window_;
+  image<float> relief_;
+  filter_type filter_;
+};
+
+}  // namespace tacmap

@@ -1,0 +1,373 @@
+// tacmap-evaluate — the paper's evaluation (Sec. IV-B, Figs. 6-8) over maps x configurations.
+//
+// Runs every sequence of every map through the localization pipeline (sim/experiment.hpp) for
+// every configuration in the cross product of --model x --pairing x --shape x --features (NCC
+// ignores the last three), and writes one CSV row per (map, configuration, sequence, touch).
+// Prints a summary per map and configuration: sequences localized (error < 5 mm by touch 6 and
+// staying below), median touches to localize, median final error.
+//
+// Maps: the bundled gecko with its protocol (--gecko, on by default), and photographs (--photo,
+// any PNG/JPEG/PGM stb_image reads): each is turned grey, area-resized to 120 x 120 px at the
+// paper's 3.4/3 mm per px, pressed as a continuous relief (height = 4 mm x intensity) and given a
+// generated protocol — 7 random touch locations, 22 random orders, odometry noise 0.5 mm per
+// axis — all fixed by --seed. Everything (simulator noise included) is reproducible from --seed.
+//
+//   tacmap-evaluate --photo camera.png --model sift_lite,ncc --output eval.csv
+#include <CLI/CLI.hpp>
+
+#define STB_IMAGE_IMPLEMENTATION
+#define STBI_ONLY_PNG
+#define STBI_ONLY_JPEG
+#define STBI_ONLY_PNM
+#define STBI_NO_HDR
+#define STBI_NO_LINEAR
+#if defined(__GNUC__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wsign-conversion"
+#pragma GCC diagnostic ignored "-Wold-style-cast"
+#pragma GCC diagnostic ignored "-Wshadow"
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wdouble-promotion"
+#pragma GCC diagnostic ignored "-Wcast-qual"
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
+#pragma GCC diagnostic ignored "-Wuseless-cast"
+#pragma GCC diagnostic ignored "-Wpedantic"
+#endif
+#include <stb/stb_image.h>
+#if defined(__GNUC__)
+#pragma GCC diagnostic pop
+#endif
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "tacmap/sim/experiment.hpp"
+#include "tacmap/sim/protocol.hpp"
+#include "tacmap/sim/random.hpp"
+
+#ifndef TACMAP_DATA_DIR
+#define TACMAP_DATA_DIR "data"
+#endif
+
+namespace {
+
+using tacmap::image;
+
+// A photograph as grey intensities in [0, 1] (stb_image's own grey conversion).
+image<float> load_photo(const std::string& path) {
+  int w = 0, h = 0, channels = 0;
+  std::unique_ptr<unsigned char, void (*)(void*)> pixels(
+      stbi_load(path.c_str(), &w, &h, &channels, 1), stbi_image_free);
+  if (!pixels)
+    tacmap::detail::fail("tacmap-evaluate: cannot read the photograph '", path, "' (",
+                         stbi_failure_reason(),
+                         "); expected a readable PNG, JPEG or PGM file — check the path");
+  image<float> out(h, w);
+  for (Eigen::Index r = 0; r < h; ++r)
+    for (Eigen::Index c = 0; c < w; ++c)
+      out(r, c) = static_cast<float>(pixels.get()[r * w + c]) / 255.0F;
+  return out;
+}
+
+// Area-average resize: each output pixel is the mean of the source area it covers (fractional
+// overlaps weighted), so shrinking a photograph does not alias.
+image<float> resize_area(const image<float>& src, Eigen::Index rows, Eigen::Index cols) {
+  const double sy = static_cast<double>(src.rows()) / static_cast<double>(rows);
+  const double sx = static_cast<double>(src.cols()) / static_cast<double>(cols);
+  // Weights of the source indices each output index covers, per axis.
+  const auto weights = [](Eigen::Index n_out, double scale, Eigen::Index n_src) {
+    std::vector<std::vector<std::pair<Eigen::Index, double>>> w(static_cast<std::size_t>(n_out));
+    for (Eigen::Index o = 0; o < n_out; ++o) {
+      const double a = static_cast<double>(o) * scale, b = a + scale;
+      for (auto s = static_cast<Eigen::Index>(std::floor(a));
+           s < n_src && static_cast<double>(s) < b; ++s) {
+        const double overlap =
+            std::min(b, static_cast<double>(s + 1)) - std::max(a, static_cast<double>(s));
+        if (overlap > 0) w[static_cast<std::size_t>(o)].push_back({s, overlap / scale});
+      }
+    }
+    return w;
+  };
+  const auto wy = weights(rows, sy, src.rows());
+  const auto wx = weights(cols, sx, src.cols());
+  image<float> out(rows, cols);
+  for (Eigen::Index r = 0; r < rows; ++r)
+    for (Eigen::Index c = 0; c < cols; ++c) {
+      double sum = 0, total = 0;
+      for (const auto& [y, a] : wy[static_cast<std::size_t>(r)])
+        for (const auto& [x, b] : wx[static_cast<std::size_t>(c)]) {
+          sum += a * b * src(y, x);
+          total += a * b;
+        }
+      out(r, c) = static_cast<float>(sum / total);
+    }
+  return out;
+}
+
+// A photograph's protocol: 7 touch locations on pixel-aligned states, 22 random orders, measured
+// odometry = true motion + N(0, 0.5 mm) per axis (the gecko protocol's noise), from `seed`.
+tacmap::touch_protocol photo_protocol(const std::string& path, std::uint64_t seed) {
+  tacmap::touch_protocol p;
+  p.map_file = path;
+  p.map = resize_area(load_photo(path), 120, 120);
+  p.mm_per_px = 3.4 / 3.0;
+  p.relief = {.kind = tacmap::relief_kind::continuous,
+              .threshold = 0.5F,
+              .height_mm = 4.0,
+              .edge_smoothing_px = 0.0};
+  p.odometry_sigma_mm = 0.5;
+  p.seed = seed;
+  const tacmap::planar_grid<float> grid(p.map_size(), p.mm_per_px,
+                                        tacmap::tactile_window({}, p.mm_per_px));
+  tacmap::sim_rng rng(seed);
+  while (p.locations.size() < 7) {  // 7 distinct states
+    const auto s = grid.state_mm(
+        static_cast<Eigen::Index>(rng.below(static_cast<std::uint64_t>(grid.size()))));
+    const tacmap::touch_location loc{s(0), s(1)};
+    if (std::find(p.locations.begin(), p.locations.end(), loc) == p.locations.end())
+      p.locations.push_back(loc);
+  }
+  const std::size_t n = p.locations.size();
+  for (int q = 0; q < 22; ++q) {
+    std::vector<std::size_t> order(n);
+    for (std::size_t k = 0; k < n; ++k) order[k] = k;
+    for (std::size_t k = n - 1; k > 0; --k) std::swap(order[k], order[rng.below(k + 1)]);
+    tacmap::touch_sequence seq;
+    for (std::size_t k = 0; k < n; ++k) {
+      tacmap::protocol_step step;
+      step.location = order[k];
+      if (k > 0) {
+        const auto& from = p.locations[order[k - 1]];
+        const auto& to = p.locations[order[k]];
+        step.true_motion = {to.x_mm - from.x_mm, to.y_mm - from.y_mm};
+        step.measured_motion = {step.true_motion.dx_mm + p.odometry_sigma_mm * rng.normal(),
+                                step.true_motion.dy_mm + p.odometry_sigma_mm * rng.normal()};
+      }
+      seq.push_back(step);
+    }
+    p.sequences.push_back(std::move(seq));
+  }
+  return p;
+}
+
+struct named_map {
+  std::string name;
+  tacmap::touch_protocol protocol;
+};
+
+template <class E>
+E parse_choice(const std::string& what, const std::string& value,
+               const std::vector<std::pair<std::string, E>>& choices) {
+  std::string names;
+  for (const auto& [name, e] : choices) {
+    if (name == value) return e;
+    names += (names.empty() ? "" : ", ") + name;
+  }
+  throw CLI::ValidationError(what, "'" + value + "' is not one of: " + names);
+}
+
+std::string csv_number(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.4f", v);
+  return buf;
+}
+
+void progress(std::size_t done, std::size_t total, const std::string& label) {
+  constexpr std::size_t width = 30;
+  const std::size_t filled = total == 0 ? width : done * width / total;
+  std::fprintf(stderr, "\r[%s%s] %zu/%zu %-60.60s", std::string(filled, '#').c_str(),
+               std::string(width - filled, ' ').c_str(), done, total, label.c_str());
+  std::fflush(stderr);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  CLI::App app{"tacmap-evaluate: localization over maps x configurations (paper Sec. IV-B)"};
+  std::string gecko_dir = std::string(TACMAP_DATA_DIR) + "/gecko";
+  bool no_gecko = false;
+  std::vector<std::string> photos;
+  std::vector<std::string> models{"classic_sift"}, pairings{"aligned"}, shapes{"exponential"},
+      features{"per_window"};
+  std::size_t max_sequences = 0;
+  std::uint64_t seed = 1;
+  std::optional<double> tau;
+  double tempering = 1.0, motion_sigma = 1.0;
+  int motion_k = 8;
+  std::string output = "evaluation.csv";
+  double min_success = -1.0;
+  bool quiet = false;
+  tacmap::simulator_params sim;  // the simulated sensor's physics (defaults: the paper's array)
+  app.add_option("--gecko", gecko_dir, "folder of the gecko protocol (protocol.txt)");
+  app.add_flag("--no-gecko", no_gecko, "do not evaluate on the gecko");
+  app.add_option("--photo", photos, "photograph(s) to use as maps (PNG/JPEG/PGM)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--model", models, "sift_lite, classic_sift, ncc (comma-separated)")
+      ->delimiter(',');
+  app.add_option("--pairing", pairings, "all_pairs, aligned")->delimiter(',');
+  app.add_option("--shape", shapes, "inverse, exponential")->delimiter(',');
+  app.add_option("--features", features, "per_window, shared_dense")->delimiter(',');
+  app.add_option("--sequences", max_sequences,
+                 "run only the first N sequences of each map (0 = all)");
+  app.add_option("--seed", seed, "seeds the simulator and the photographs' protocols");
+  app.add_option("--tau", tau, "temperature (exponential shape / NCC); default: the model's");
+  app.add_option("--tempering", tempering, "exponent on the likelihood")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--motion-sigma", motion_sigma, "odometry noise sigma, mm")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--motion-k", motion_k, "odometry noise neighbours (4, 8, 12, 20, 24, ...)");
+  app.add_option("--output,-o", output, "CSV file to write");
+  app.add_option(
+      "--min-success-rate", min_success,
+      "exit 1 when any map x configuration localizes fewer than this fraction of sequences");
+  app.add_flag("--quiet,-q", quiet, "no progress bar");
+  app.add_option("--noise-counts", sim.noise_counts, "sensor read-out noise, counts (of 4095)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--gain-variation", sim.gain_variation, "relative per-taxel gain spread")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--dead-fraction", sim.dead_fraction, "fraction of dead taxels")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--press-depth", sim.press_depth_mm, "indentation of the highest point, mm")
+      ->check(CLI::NonNegativeNumber);
+  CLI11_PARSE(app, argc, argv);
+
+  // Configurations: the cross product; NCC once (pairing, shape and features do not apply).
+  std::vector<tacmap::localization_config> configs;
+  for (const auto& m : models) {
+    const auto kind =
+        parse_choice<tacmap::measurement_kind>("--model", m,
+                                               {{"sift_lite", tacmap::measurement_kind::lite},
+                                                {"classic_sift", tacmap::measurement_kind::classic},
+                                                {"ncc", tacmap::measurement_kind::ncc}});
+    tacmap::localization_config base;
+    base.model = kind;
+    base.tau = tau;
+    base.tempering = tempering;
+    base.motion_sigma_mm = motion_sigma;
+    base.motion_k = motion_k;
+    base.simulator_seed = seed;
+    base.simulator = sim;
+    if (kind == tacmap::measurement_kind::ncc) {
+      configs.push_back(base);
+      continue;
+    }
+    for (const auto& pr : pairings)
+      for (const auto& sh : shapes)
+        for (const auto& fe : features) {
+          auto c = base;
+          c.pairs = parse_choice<tacmap::pairing>(
+              "--pairing", pr,
+              {{"all_pairs", tacmap::pairing::all_pairs}, {"aligned", tacmap::pairing::aligned}});
+          c.shape = parse_choice<tacmap::likelihood_shape>(
+              "--shape", sh,
+              {{"inverse", tacmap::likelihood_shape::inverse},
+               {"exponential", tacmap::likelihood_shape::exponential}});
+          c.features = parse_choice<tacmap::window_features>(
+              "--features", fe,
+              {{"per_window", tacmap::window_features::per_window},
+               {"shared_dense", tacmap::window_features::shared_dense}});
+          configs.push_back(c);
+        }
+  }
+
+  std::vector<named_map> maps;
+  if (!no_gecko)
+    maps.push_back(
+        {"gecko", tacmap::load_protocol(std::filesystem::path(gecko_dir) / "protocol.txt")});
+  for (std::size_t i = 0; i < photos.size(); ++i) {
+    std::uint64_t s = seed + 0x9E3779B97F4A7C15ULL * (i + 1);
+    maps.push_back({std::filesystem::path(photos[i]).stem().string(),
+                    photo_protocol(photos[i], tacmap::splitmix64(s))});
+  }
+  if (maps.empty()) throw CLI::ValidationError("maps", "no map: drop --no-gecko or give --photo");
+
+  std::ofstream csv(output);
+  if (!csv)
+    tacmap::detail::fail<std::runtime_error>("tacmap-evaluate: cannot open '", output,
+                                             "' for writing; check the folder exists");
+  csv << "map,config,model,pairing,shape,features,sequence,touch,location,true_x_mm,true_y_mm,"
+         "map_x_mm,map_y_mm,error_mm,entropy_nats,accepted,localized,touches_to_localize\n";
+
+  std::size_t total = 0;
+  for (const auto& m : maps) {
+    const std::size_t n = m.protocol.sequences.size();
+    total += configs.size() * (max_sequences == 0 ? n : std::min(n, max_sequences));
+  }
+  std::size_t done = 0;
+  bool below_floor = false;
+  std::printf(
+      "| map | configuration | localized | median touches to localize | median final error mm | "
+      "median final entropy nats |\n");
+  std::printf("|---|---|---|---|---|---|\n");
+  for (const auto& m : maps) {
+    const std::size_t n = max_sequences == 0 ? m.protocol.sequences.size()
+                                             : std::min(m.protocol.sequences.size(), max_sequences);
+    for (const auto& config : configs) {
+      if (!quiet) progress(done, total, m.name + " " + config.name() + " (building the model)");
+      tacmap::localization_experiment experiment(m.protocol, config);  // once per map x config
+      std::size_t successes = 0;
+      std::vector<double> ttl, final_errors, final_entropies;
+      for (std::size_t q = 0; q < n; ++q) {
+        const auto run = experiment.run(q);
+        const bool ok = tacmap::localized(run.touches);
+        const auto t = tacmap::touches_to_localize(run.touches);
+        successes += ok ? 1U : 0U;
+        if (ok) ttl.push_back(static_cast<double>(*t));
+        final_errors.push_back(run.touches.back().error_mm);
+        final_entropies.push_back(run.touches.back().entropy_nats);
+        for (const auto& r : run.touches)
+          csv << m.name << ',' << config.name() << ',' << tacmap::to_string(config.model) << ','
+              << (config.model == tacmap::measurement_kind::ncc ? ""
+                                                                : tacmap::to_string(config.pairs))
+              << ','
+              << (config.model == tacmap::measurement_kind::ncc ? ""
+                                                                : tacmap::to_string(config.shape))
+              << ','
+              << (config.model == tacmap::measurement_kind::ncc
+                      ? ""
+                      : tacmap::to_string(config.features))
+              << ',' << q << ',' << r.step + 1 << ',' << r.location << ','
+              << csv_number(r.true_x_mm) << ',' << csv_number(r.true_y_mm) << ','
+              << csv_number(r.map_x_mm) << ',' << csv_number(r.map_y_mm) << ','
+              << csv_number(r.error_mm) << ',' << csv_number(r.entropy_nats) << ','
+              << (r.accepted ? 1 : 0) << ',' << (ok ? 1 : 0) << ','
+              << (t ? std::to_string(*t) : std::string()) << '\n';
+        ++done;
+        if (!quiet) progress(done, total, m.name + " " + config.name());
+      }
+      if (!quiet) std::fprintf(stderr, "\r%*s\r", 110, "");
+      char ttl_text[32] = "-";
+      if (!ttl.empty()) std::snprintf(ttl_text, sizeof ttl_text, "%.1f", tacmap::median(ttl));
+      std::printf("| %s | %s | %zu / %zu | %s | %.2f | %.2f |\n", m.name.c_str(),
+                  config.name().c_str(), successes, n, ttl_text, tacmap::median(final_errors),
+                  tacmap::median(final_entropies));
+      std::fflush(stdout);
+      if (n > 0 && static_cast<double>(successes) < min_success * static_cast<double>(n))
+        below_floor = true;
+    }
+  }
+  csv.close();
+  if (!csv)
+    tacmap::detail::fail<std::runtime_error>("tacmap-evaluate: writing '", output, "' failed");
+  std::fprintf(stderr, "wrote %s\n", std::filesystem::absolute(output).string().c_str());
+  if (below_floor) {
+    std::fprintf(stderr, "tacmap-evaluate: a success rate is below --min-success-rate %.2f\n",
+                 min_success);
+    return 1;
+  }
+  return 0;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "\ntacmap-evaluate: %s\n", e.what());
+  return 2;
+}
