@@ -79,6 +79,53 @@ inline void put_be32(std::string& out, std::uint32_t v) {
     out.push_back(static_cast<char>((v >> static_cast<unsigned>(shift)) & 0xFFU));
 }
 
+/// A PNG file around `raw` scanlines (each prefixed with filter byte 0) of `width` x `height`
+/// pixels, 8 bits per sample, `color_type` 0 (grey) or 2 (RGB); stored (uncompressed) deflate.
+[[nodiscard]] inline std::string png_container(Eigen::Index width, Eigen::Index height,
+                                               int color_type, const std::string& raw) {
+  // zlib stream: header 0x78 0x01, stored blocks of up to 65535 bytes, Adler-32 trailer.
+  std::string z = "\x78\x01";
+  for (std::size_t pos = 0; pos < raw.size() || pos == 0;) {
+    const std::size_t len = std::min<std::size_t>(65535, raw.size() - pos);
+    const bool last = pos + len >= raw.size();
+    z.push_back(last ? '\x01' : '\x00');
+    const auto n = static_cast<std::uint16_t>(len);
+    const auto nn = static_cast<std::uint16_t>(~n);
+    z.push_back(static_cast<char>(n & 0xFFU));
+    z.push_back(static_cast<char>(n >> 8U));
+    z.push_back(static_cast<char>(nn & 0xFFU));
+    z.push_back(static_cast<char>(nn >> 8U));
+    z.append(raw, pos, len);
+    pos += len;
+    if (last) break;
+  }
+  std::uint32_t a = 1;
+  std::uint32_t b = 0;
+  for (const char ch : raw) {
+    a = (a + static_cast<std::uint8_t>(ch)) % 65521U;
+    b = (b + a) % 65521U;
+  }
+  put_be32(z, (b << 16U) | a);
+
+  std::string out = "\x89PNG\r\n\x1a\n";
+  const auto chunk = [&](std::string_view type, const std::string& data) {
+    put_be32(out, static_cast<std::uint32_t>(data.size()));
+    std::string body(type);
+    body += data;
+    out += body;
+    put_be32(out, crc32(body));
+  };
+  std::string ihdr;
+  put_be32(ihdr, static_cast<std::uint32_t>(width));
+  put_be32(ihdr, static_cast<std::uint32_t>(height));
+  ihdr.push_back('\x08');  // 8 bits per sample
+  ihdr.push_back(static_cast<char>(color_type));
+  ihdr += std::string("\x00\x00\x00", 3);  // deflate, filter 0, no interlace
+  chunk("IHDR", ihdr);
+  chunk("IDAT", z);
+  chunk("IEND", {});
+  return out;
+}
 }  // namespace detail::image_io
 
 /// Binary PGM (P5, maxval 255) bytes of `img`, intensities in [0, 1] rounded to 8 bits.
@@ -182,7 +229,6 @@ inline void write_pgm(const std::filesystem::path& path, const image<float>& img
 /// 8-bit grey-level PNG bytes of `img` (intensities in [0, 1]), uncompressed deflate.
 [[nodiscard]] inline std::string encode_png(const image<float>& img) {
   detail::image_io::check_writable(img, "encode_png");
-  using detail::image_io::put_be32;
   // Raw scanlines, each prefixed with filter type 0 (none).
   std::string raw;
   raw.reserve(static_cast<std::size_t>(img.rows() * (img.cols() + 1)));
@@ -191,46 +237,7 @@ inline void write_pgm(const std::filesystem::path& path, const image<float>& img
     for (Eigen::Index c = 0; c < img.cols(); ++c)
       raw.push_back(static_cast<char>(detail::image_io::to_byte(img(r, c))));
   }
-  // zlib stream: header 0x78 0x01, stored blocks of up to 65535 bytes, Adler-32 trailer.
-  std::string z = "\x78\x01";
-  for (std::size_t pos = 0; pos < raw.size() || pos == 0;) {
-    const std::size_t len = std::min<std::size_t>(65535, raw.size() - pos);
-    const bool last = pos + len >= raw.size();
-    z.push_back(last ? '\x01' : '\x00');
-    const auto n = static_cast<std::uint16_t>(len);
-    const auto nn = static_cast<std::uint16_t>(~n);
-    z.push_back(static_cast<char>(n & 0xFFU));
-    z.push_back(static_cast<char>(n >> 8U));
-    z.push_back(static_cast<char>(nn & 0xFFU));
-    z.push_back(static_cast<char>(nn >> 8U));
-    z.append(raw, pos, len);
-    pos += len;
-    if (last) break;
-  }
-  std::uint32_t a = 1;
-  std::uint32_t b = 0;
-  for (const char ch : raw) {
-    a = (a + static_cast<std::uint8_t>(ch)) % 65521U;
-    b = (b + a) % 65521U;
-  }
-  put_be32(z, (b << 16U) | a);
-
-  std::string out = "\x89PNG\r\n\x1a\n";
-  const auto chunk = [&](std::string_view type, const std::string& data) {
-    put_be32(out, static_cast<std::uint32_t>(data.size()));
-    std::string body(type);
-    body += data;
-    out += body;
-    put_be32(out, detail::image_io::crc32(body));
-  };
-  std::string ihdr;
-  put_be32(ihdr, static_cast<std::uint32_t>(img.cols()));
-  put_be32(ihdr, static_cast<std::uint32_t>(img.rows()));
-  ihdr += std::string("\x08\x00\x00\x00\x00", 5);  // 8 bit, grey, deflate, filter 0, no interlace
-  chunk("IHDR", ihdr);
-  chunk("IDAT", z);
-  chunk("IEND", {});
-  return out;
+  return detail::image_io::png_container(img.cols(), img.rows(), 0, raw);
 }
 
 /// Writes `img` (intensities in [0, 1]) as an 8-bit grey-level PNG.

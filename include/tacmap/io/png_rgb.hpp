@@ -40,7 +40,6 @@ struct rgb_image {
 /// 8-bit RGB PNG bytes of `img`. Throws std::invalid_argument when the channels differ in size,
 /// are empty or hold non-finite values (values outside [0, 1] are clamped).
 [[nodiscard]] inline std::string encode_png_rgb(const rgb_image& img) {
-  using detail::image_io::put_be32;
   using detail::image_io::to_byte;
   if (img.g.rows() != img.r.rows() || img.g.cols() != img.r.cols() ||
       img.b.rows() != img.r.rows() || img.b.cols() != img.r.cols())
@@ -60,46 +59,7 @@ struct rgb_image {
       raw.push_back(static_cast<char>(to_byte(img.b(row, col))));
     }
   }
-  // zlib stream: header, stored blocks of up to 65535 bytes, Adler-32 trailer (RFC 1950/1951).
-  std::string z = "\x78\x01";
-  for (std::size_t pos = 0;;) {
-    const std::size_t len = std::min<std::size_t>(65535, raw.size() - pos);
-    const bool last = pos + len >= raw.size();
-    z.push_back(last ? '\x01' : '\x00');
-    const auto n = static_cast<std::uint16_t>(len);
-    const auto nn = static_cast<std::uint16_t>(~n);
-    z.push_back(static_cast<char>(n & 0xFFU));
-    z.push_back(static_cast<char>(n >> 8U));
-    z.push_back(static_cast<char>(nn & 0xFFU));
-    z.push_back(static_cast<char>(nn >> 8U));
-    z.append(raw, pos, len);
-    pos += len;
-    if (last) break;
-  }
-  std::uint32_t a = 1;
-  std::uint32_t b = 0;
-  for (const char ch : raw) {
-    a = (a + static_cast<std::uint8_t>(ch)) % 65521U;
-    b = (b + a) % 65521U;
-  }
-  put_be32(z, (b << 16U) | a);
-
-  std::string out = "\x89PNG\r\n\x1a\n";
-  const auto chunk = [&](std::string_view type, const std::string& data) {
-    put_be32(out, static_cast<std::uint32_t>(data.size()));
-    std::string body(type);
-    body += data;
-    out += body;
-    put_be32(out, detail::image_io::crc32(body));
-  };
-  std::string ihdr;
-  put_be32(ihdr, static_cast<std::uint32_t>(img.cols()));
-  put_be32(ihdr, static_cast<std::uint32_t>(img.rows()));
-  ihdr += std::string("\x08\x02\x00\x00\x00", 5);  // 8 bit, RGB, deflate, filter 0, no interlace
-  chunk("IHDR", ihdr);
-  chunk("IDAT", z);
-  chunk("IEND", {});
-  return out;
+  return detail::image_io::png_container(img.cols(), img.rows(), 2, raw);
 }
 
 /// Writes `img` as an 8-bit RGB PNG (see `encode_png_rgb`); std::runtime_error when the file
