@@ -111,11 +111,9 @@ TEST_CASE("likelihood shapes: eq. (2) inverse and exponential, with tempering") 
   const auto map = random_image(30, 30, 3);
   const grid_t grid({.width = 30, .height = 30}, 1.0, {.width = 6, .height = 14});
   const auto z = random_image(14, 6, 4);
-  const descriptor_likelihood inv(raw_patch{}, map, grid.window_size(),
-                                  {.spacing = 4,
-                                   .shape = likelihood_shape::inverse,
-                                   .epsilon = 0.01,
-                                   .tempering = 0.5});
+  const descriptor_likelihood inv(
+      raw_patch{}, map, grid.window_size(),
+      {.spacing = 4, .shape = likelihood_shape::inverse, .epsilon = 0.01, .tempering = 0.5});
   const descriptor_likelihood expo(
       raw_patch{}, map, grid.window_size(),
       {.spacing = 4, .shape = likelihood_shape::exponential, .tau = 2.0, .tempering = 3.0});
