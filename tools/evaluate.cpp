@@ -143,20 +143,7 @@ tacmap::touch_protocol photo_protocol(const std::string& path, std::uint64_t see
     std::vector<std::size_t> order(n);
     for (std::size_t k = 0; k < n; ++k) order[k] = k;
     for (std::size_t k = n - 1; k > 0; --k) std::swap(order[k], order[rng.below(k + 1)]);
-    tacmap::touch_sequence seq;
-    for (std::size_t k = 0; k < n; ++k) {
-      tacmap::protocol_step step;
-      step.location = order[k];
-      if (k > 0) {
-        const auto& from = p.locations[order[k - 1]];
-        const auto& to = p.locations[order[k]];
-        step.true_motion = {to.x_mm - from.x_mm, to.y_mm - from.y_mm};
-        step.measured_motion = {step.true_motion.dx_mm + p.odometry_sigma_mm * rng.normal(),
-                                step.true_motion.dy_mm + p.odometry_sigma_mm * rng.normal()};
-      }
-      seq.push_back(step);
-    }
-    p.sequences.push_back(std::move(seq));
+    p.sequences.push_back(tacmap::sequence_visiting(p.locations, order, p.odometry_sigma_mm, rng));
   }
   return p;
 }

@@ -261,24 +261,9 @@ inline shape gecko_shape() {
     if (std::find(visits.begin(), visits.end(), order) == visits.end()) visits.push_back(order);
   }
   const auto round4 = [](double v) { return std::round(v * 1e4) / 1e4; };
-  for (const auto& order : visits) {
-    touch_sequence seq;
-    for (std::size_t k = 0; k < order.size(); ++k) {
-      protocol_step step;
-      step.location = order[k];
-      if (k > 0) {
-        const touch_location& from = p.locations[order[k - 1]];
-        const touch_location& to = p.locations[order[k]];
-        step.true_motion = {round4(to.x_mm - from.x_mm), round4(to.y_mm - from.y_mm)};
-        const double nx = params.odometry_sigma_mm * noise_rng.normal();
-        const double ny = params.odometry_sigma_mm * noise_rng.normal();
-        step.measured_motion = {round4(step.true_motion.dx_mm + nx),
-                                round4(step.true_motion.dy_mm + ny)};
-      }
-      seq.push_back(step);
-    }
-    p.sequences.push_back(std::move(seq));
-  }
+  for (const auto& order : visits)
+    p.sequences.push_back(
+        sequence_visiting(p.locations, order, params.odometry_sigma_mm, noise_rng, round4));
   return p;
 }
 

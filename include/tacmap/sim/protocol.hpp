@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 #include <string_view>
@@ -54,6 +55,31 @@ struct protocol_step {
 
 /// A sequence of touches, in order.
 using touch_sequence = std::vector<protocol_step>;
+
+/// The sequence that visits `locations` in `order`: each move's true displacement, and a measured
+/// one with N(0, sigma^2) noise per axis drawn from `noise` (x first, then y). `round` is applied
+/// to every stored value (e.g. to the precision a data file keeps).
+template <class Rng, class Round = std::identity>
+[[nodiscard]] touch_sequence sequence_visiting(const std::vector<touch_location>& locations,
+                                               const std::vector<std::size_t>& order,
+                                               double sigma_mm, Rng& noise, Round round = {}) {
+  touch_sequence seq;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    protocol_step step;
+    step.location = order[k];
+    if (k > 0) {
+      const touch_location& from = locations[order[k - 1]];
+      const touch_location& to = locations[order[k]];
+      step.true_motion = {round(to.x_mm - from.x_mm), round(to.y_mm - from.y_mm)};
+      const double nx = sigma_mm * noise.normal();
+      const double ny = sigma_mm * noise.normal();
+      step.measured_motion = {round(step.true_motion.dx_mm + nx),
+                              round(step.true_motion.dy_mm + ny)};
+    }
+    seq.push_back(step);
+  }
+  return seq;
+}
 
 /// A whole protocol: the map, its relief, the touch locations and the sequences.
 struct touch_protocol {
