@@ -31,13 +31,10 @@ tacmap::image<float> bench_map() {
   return map / map.maxCoeff();
 }
 
-template <class D>
-void descriptor_update(benchmark::State& state, tacmap::pairing pairs,
-                       tacmap::window_features features = tacmap::window_features::per_window) {
-  const auto map = bench_map();
-  const auto grid = grid_t::paper();
-  const tacmap::descriptor_likelihood<D> model(D{}, map, grid.window_size(),
-                                               {.features = features, .pairs = pairs});
+// One touch (a window cut from the map) through `model`, timed over the whole grid.
+template <class Model>
+void time_measurement(benchmark::State& state, const Model& model, const tacmap::image<float>& map,
+                      const grid_t& grid) {
   const tacmap::image<float> z = map.block(30, 40, 42, 18);
   Eigen::ArrayXf ll(grid.size());
   for (auto _ : state) {
@@ -45,6 +42,16 @@ void descriptor_update(benchmark::State& state, tacmap::pairing pairs,
     benchmark::DoNotOptimize(ll.data());
   }
   state.SetItemsProcessed(state.iterations() * grid.size());
+}
+
+template <class D>
+void descriptor_update(benchmark::State& state, tacmap::pairing pairs,
+                       tacmap::window_features features = tacmap::window_features::per_window) {
+  const auto map = bench_map();
+  const auto grid = grid_t::paper();
+  const tacmap::descriptor_likelihood<D> model(D{}, map, grid.window_size(),
+                                               {.features = features, .pairs = pairs});
+  time_measurement(state, model, map, grid);
 }
 void sift_lite_update(benchmark::State& s) {
   descriptor_update<tacmap::sift_lite>(s, tacmap::pairing::all_pairs);
@@ -110,13 +117,7 @@ void ncc_update(benchmark::State& state) {
   const auto map = bench_map();
   const auto grid = grid_t::paper();
   const tacmap::ncc_likelihood<float> model(map, grid.window_size());
-  const tacmap::image<float> z = map.block(30, 40, 42, 18);
-  Eigen::ArrayXf ll(grid.size());
-  for (auto _ : state) {
-    model.log_likelihood(grid, z, ll);
-    benchmark::DoNotOptimize(ll.data());
-  }
-  state.SetItemsProcessed(state.iterations() * grid.size());
+  time_measurement(state, model, map, grid);
 }
 BENCHMARK(ncc_update);
 
