@@ -39,3 +39,26 @@ TEST_CASE_TEMPLATE(
     CHECK(first == tried);
   }
 }
+
+TEST_CASE_TEMPLATE("tactile descriptors: the sampled path equals the dense field's columns", D,
+                   tacmap::sift_lite, tacmap::classic_sift) {
+  // descriptor_likelihood describes a tactile image with dense_sift::sample when the descriptor's
+  // grid spacing equals the model's; otherwise it cuts the dense field. Both must agree.
+  const auto map = tacmap::testing::conformance_image(60, 40, 5);
+  const tacmap::image<float> z = tacmap::testing::conformance_image(42, 18, 6);
+  const D d{};
+  for (const Eigen::Index spacing : {d.grid_spacing(), Eigen::Index{3}}) {
+    CAPTURE(spacing);
+    const tacmap::descriptor_likelihood<D> model(d, map, {.width = 18, .height = 42},
+                                                 {.spacing = spacing});
+    const auto g = model.tactile_descriptors(z);
+    const auto field = d.compute(z);
+    REQUIRE(g.cols() == model.patches_per_window());
+    REQUIRE(g.cols() == (42 - d.patch_size()) / spacing + 1);
+    for (Eigen::Index m = 0; m < g.cols(); ++m) {
+      const auto o = model.patch_offset(m);
+      CHECK((g.col(m) - field.at(o.row, o.col)).abs().maxCoeff() < 1e-6F);
+      CHECK(field.at(o.row, o.col).abs().sum() > 0.1F);  // a real, non-zero descriptor
+    }
+  }
+}

@@ -30,6 +30,17 @@ TEST_CASE_TEMPLATE("accumulate_distances matches its scalar reference", T, float
           CHECK(static_cast<double>(fast(q)) ==
                 doctest::Approx(static_cast<double>(ref(q))).epsilon(1e-5));
         if (first == 2 && count == 1) CHECK(fast(0) == T(0.5));  // + exactly 0
+        // Stored instead of added: the same sums without the 0.5 already in the buffer.
+        Eigen::Array<T, Eigen::Dynamic, 1> stored =
+            Eigen::Array<T, Eigen::Dynamic, 1>::Constant(positions, T(7));
+        Eigen::Array<T, Eigen::Dynamic, 1> stored_ref = stored;
+        tacmap::detail::accumulate_distances(tiles, g, first, count, stored.data(), false);
+        tacmap::detail::accumulate_distances_scalar(tiles, g, first, count, stored_ref.data(),
+                                                    false);
+        for (Eigen::Index q = 0; q < positions; ++q)
+          CHECK(static_cast<double>(stored(q)) ==
+                doctest::Approx(static_cast<double>(stored_ref(q))).epsilon(1e-5));
+        if (first == 2 && count == 1) CHECK(stored(0) == T(0));
       }
     }
   }

@@ -25,6 +25,7 @@
 //    wide window) this costs accuracy — measured in README.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <concepts>
 #include <stdexcept>
@@ -108,6 +109,18 @@ concept euclidean_descriptor = descriptor<D> && requires {
   requires D::euclidean_distance;
 };
 
+/// Descriptors that can also describe only the patches on their own spacing grid (top-left at
+/// multiples of `grid_spacing()`, row-major), as `dense_sift::sample` does: the tactile side then
+/// skips the positions it does not use. Column order must be row-major over that grid.
+template <class D>
+concept samples_on_grid = descriptor<D> &&
+    requires(const D& d, const image<typename D::scalar_type>& img) {
+  { d.grid_spacing() } -> std::same_as<Eigen::Index>;
+  {
+    d.sample(img).values
+    } -> std::convertible_to<Eigen::Array<typename D::scalar_type, Eigen::Dynamic, Eigen::Dynamic>>;
+};
+
 /// The paper's measurement model over a `planar_grid`, for any `descriptor`.
 template <descriptor Descriptor>
 class descriptor_likelihood {
@@ -142,7 +155,13 @@ class descriptor_likelihood {
     field_ = descriptor_.compute(map_t);
     TACMAP_ASSERT(field_.rows == map.rows() - p + 1 && field_.cols == map.cols() - p + 1,
                   "descriptor::compute returned a field of the wrong shape");
-    field_tiles_ = detail::descriptor_tiles<scalar_type>(field_.values);
+    // Windows read field rows [0, rows_ + max offset row) only (the patches' offsets grow down
+    // the window): the kernel skips the rest (6 of 103 rows for the paper's map).
+    Eigen::Index last_offset_row = 0;
+    for (const grid_cell& o : offsets_) last_offset_row = std::max(last_offset_row, o.row);
+    const Eigen::Index used_rows = (map.rows() - window.height + 1) + last_offset_row;
+    field_tiles_ =
+        detail::descriptor_tiles<scalar_type>(field_.values.leftCols(used_rows * field_.cols));
     rows_ = map.rows() - window.height + 1;
     cols_ = map.cols() - window.width + 1;
     if (params.features == window_features::per_window) {
@@ -186,9 +205,21 @@ class descriptor_likelihood {
                    " (the sensor window at map scale — preprocess the frame first)");
     if (!detail::all_finite(z))
       detail::fail("descriptor_likelihood: the tactile image contains NaN or infinite pixels");
-    const auto zf = descriptor_.compute(z.template cast<scalar_type>());
-    Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g(zf.values.rows(),
-                                                                patches_per_window());
+    const image<scalar_type> zt = z.template cast<scalar_type>();
+    Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g;
+    // A descriptor that can describe just its spacing grid (dense_sift::sample) saves most of the
+    // tactile extraction: 3 of the 25 patch positions of a 42 x 18 image are needed.
+    if constexpr (samples_on_grid<Descriptor>) {
+      if (descriptor_.grid_spacing() == params_.spacing) {
+        const auto samples = descriptor_.sample(zt);
+        TACMAP_ASSERT(samples.size() == patches_per_window(),
+                      "descriptor::sample returned the wrong number of patches");
+        g = samples.values;  // grid order = offsets_ order (row-major, same spacing)
+        return g;
+      }
+    }
+    const auto zf = descriptor_.compute(zt);
+    g.resize(zf.values.rows(), patches_per_window());
     for (Eigen::Index m = 0; m < patches_per_window(); ++m)
       g.col(m) = zf.at(offsets_[static_cast<std::size_t>(m)].row,
                        offsets_[static_cast<std::size_t>(m)].col);
@@ -225,15 +256,17 @@ class descriptor_likelihood {
  private:
   using descriptor_matrix = Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>;
 
-  // out(q) += sum over n in [first, first + count) of || F(q) - g_n ||, F position-major.
+  // out(q) (+)= sum over n in [first, first + count) of || F(q) - g_n ||, F position-major;
+  // stored rather than added when !add.
   void accumulate(const detail::descriptor_tiles<scalar_type>& f, const descriptor_matrix& g,
-                  Eigen::Index first, Eigen::Index count, scalar_type* out) const {
+                  Eigen::Index first, Eigen::Index count, scalar_type* out, bool add) const {
     if constexpr (euclidean_descriptor<Descriptor>) {
-      detail::accumulate_distances(f, g, first, count, out);
+      detail::accumulate_distances(f, g, first, count, out, add);
     } else {
       Eigen::Array<scalar_type, Eigen::Dynamic, 1> column(f.dimension());
       for (Eigen::Index q = 0; q < f.positions(); ++q) {
         for (Eigen::Index k = 0; k < f.dimension(); ++k) column(k) = f.at(q, k);
+        if (!add) out[q] = 0;
         for (Eigen::Index n = first; n < first + count; ++n)
           out[q] += descriptor_.distance(column, g.col(n));
       }
@@ -242,13 +275,12 @@ class descriptor_likelihood {
 
   void per_window_distances(const descriptor_matrix& g,
                             Eigen::Array<scalar_type, Eigen::Dynamic, 1>& out) const {
-    out.setZero();
     for (Eigen::Index m = 0; m < patches_per_window(); ++m) {
       const auto& f = per_window_[static_cast<std::size_t>(m)];
       if (params_.pairs == pairing::all_pairs)
-        accumulate(f, g, 0, g.cols(), out.data());
+        accumulate(f, g, 0, g.cols(), out.data(), m > 0);
       else
-        accumulate(f, g, m, 1, out.data());
+        accumulate(f, g, m, 1, out.data(), m > 0);
     }
   }
 
@@ -256,21 +288,25 @@ class descriptor_likelihood {
                         Eigen::Array<scalar_type, Eigen::Dynamic, 1>& out) const {
     const Eigen::Index m_count = patches_per_window();
     const Eigen::Index positions = field_.rows * field_.cols;
-    // all pairs: one column S = sum_n D_n; aligned: one column D_n per tactile patch.
+    // all pairs: one column S = sum_n D_n; aligned: one column D_n per tactile patch. Only the
+    // leading field_tiles_.positions() entries are computed and read (see the constructor).
     auto& dist = workspace_;
-    dist.setZero(positions, params_.pairs == pairing::all_pairs ? 1 : m_count);
+    dist.resize(positions, params_.pairs == pairing::all_pairs ? 1 : m_count);
     if (params_.pairs == pairing::all_pairs)
-      accumulate(field_tiles_, g, 0, m_count, dist.data());
+      accumulate(field_tiles_, g, 0, m_count, dist.data(), false);
     else
-      for (Eigen::Index n = 0; n < m_count; ++n) accumulate(field_tiles_, g, n, 1, &dist(0, n));
+      for (Eigen::Index n = 0; n < m_count; ++n)
+        accumulate(field_tiles_, g, n, 1, &dist(0, n), false);
     Eigen::Map<image<scalar_type>> d(out.data(), rows_, cols_);
-    d.setZero();
     for (Eigen::Index m = 0; m < m_count; ++m) {
       // sum_m sum_n D_n(x + o_m) = sum_m S(x + o_m); aligned: sum_m D_m(x + o_m).
       const Eigen::Index n = params_.pairs == pairing::all_pairs ? 0 : m;
       const Eigen::Map<const image<scalar_type>> dn(&dist(0, n), field_.rows, field_.cols);
       const grid_cell o = offsets_[static_cast<std::size_t>(m)];
-      d += dn.block(o.row, o.col, rows_, cols_);
+      if (m == 0)
+        d = dn.block(o.row, o.col, rows_, cols_);
+      else
+        d += dn.block(o.row, o.col, rows_, cols_);
     }
   }
 

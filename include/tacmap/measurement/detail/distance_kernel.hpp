@@ -59,12 +59,13 @@ class descriptor_tiles {
   std::vector<T, xsimd::aligned_allocator<T>> data_;
 };
 
-/// Plain reference: out(q) += sum_{n in [first, first+count)} || F(q) - g.col(n) ||.
+/// Plain reference: out(q) (+)= sum_{n in [first, first+count)} || F(q) - g.col(n) ||.
 template <class T>
 void accumulate_distances_scalar(const descriptor_tiles<T>& f,
                                  const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g,
-                                 Eigen::Index first, Eigen::Index count, T* out) {
-  for (Eigen::Index q = 0; q < f.positions(); ++q)
+                                 Eigen::Index first, Eigen::Index count, T* out, bool add = true) {
+  for (Eigen::Index q = 0; q < f.positions(); ++q) {
+    if (!add) out[q] = T(0);
     for (Eigen::Index n = first; n < first + count; ++n) {
       T sum = 0;
       for (Eigen::Index k = 0; k < f.dimension(); ++k) {
@@ -73,64 +74,105 @@ void accumulate_distances_scalar(const descriptor_tiles<T>& f,
       }
       out[q] += std::sqrt(sum);
     }
+  }
 }
 
 namespace distance_kernel {
 
-// Count tactile descriptors at once, their accumulators held in registers.
-template <int Count, class T>
-void tiles(const descriptor_tiles<T>& f, const T* g, Eigen::Index g_stride, T* out) {
+// Tiles consecutive tiles times Count tactile descriptors at once. Why blocks of tiles: each
+// accumulator is a chain of `dimension` dependent FMAs (latency ~4-5 cycles), so one tile with
+// three descriptors is latency-bound at a third of the FMA units' throughput; interleaving tiles
+// gives the core 8-9 independent chains. `gb` holds the tactile descriptors pre-broadcast (one
+// full register per element, descriptor-major), so the subtraction reads them straight from L1
+// instead of re-broadcasting a scalar per tile and element.
+template <std::size_t Tiles, std::size_t Count, class T>
+void block(const descriptor_tiles<T>& f, Eigen::Index t0, const xsimd::batch<T>* gb, T* out,
+           bool add) {
   using batch = xsimd::batch<T>;
   constexpr Eigen::Index width = descriptor_tiles<T>::width;
   const Eigen::Index dim = f.dimension();
-  const Eigen::Index full = f.positions() / width;
-  alignas(64) T lanes[static_cast<std::size_t>(width)];
-  for (Eigen::Index t = 0; t * width < f.positions(); ++t) {
-    const T* tile = f.tile(t);
-    batch acc[static_cast<std::size_t>(Count)];
-    for (int j = 0; j < Count; ++j) acc[j] = batch(T(0));
-    for (Eigen::Index k = 0; k < dim; ++k) {
-      const batch v = batch::load_aligned(tile + k * width);
-      for (int j = 0; j < Count; ++j) {
-        const batch d = v - batch(g[j * g_stride + k]);
-        acc[j] = xsimd::fma(d, d, acc[j]);
+  batch acc[Tiles][Count];
+  for (std::size_t i = 0; i < Tiles; ++i)
+    for (std::size_t j = 0; j < Count; ++j) acc[i][j] = batch(T(0));
+  const T* tile = f.tile(t0);
+  const Eigen::Index tile_stride = dim * width;
+  for (Eigen::Index k = 0; k < dim; ++k) {
+    for (std::size_t i = 0; i < Tiles; ++i) {
+      const batch v =
+          batch::load_aligned(tile + static_cast<Eigen::Index>(i) * tile_stride + k * width);
+      for (std::size_t j = 0; j < Count; ++j) {
+        const batch d = v - gb[static_cast<Eigen::Index>(j) * dim + k];
+        acc[i][j] = xsimd::fma(d, d, acc[i][j]);
       }
     }
-    batch total = xsimd::sqrt(acc[0]);
-    for (int j = 1; j < Count; ++j) total += xsimd::sqrt(acc[j]);
-    T* o = out + t * width;
-    if (t < full) {
-      (batch::load_unaligned(o) + total).store_unaligned(o);
+  }
+  for (std::size_t i = 0; i < Tiles; ++i) {
+    batch total = xsimd::sqrt(acc[i][0]);
+    for (std::size_t j = 1; j < Count; ++j) total += xsimd::sqrt(acc[i][j]);
+    const Eigen::Index first = (t0 + static_cast<Eigen::Index>(i)) * width;
+    T* o = out + first;
+    if (first + width <= f.positions()) {
+      (add ? batch::load_unaligned(o) + total : total).store_unaligned(o);
     } else {  // the last, partial tile: only the real positions
+      alignas(64) T lanes[static_cast<std::size_t>(width)];
       total.store_aligned(lanes);
-      for (Eigen::Index i = 0; t * width + i < f.positions(); ++i) o[i] += lanes[i];
+      for (Eigen::Index l = 0; first + l < f.positions(); ++l)
+        o[l] = (add ? o[l] : T(0)) + lanes[l];
     }
   }
 }
 
+// All tiles against Count descriptors: blocks of about 8-9 independent accumulator chains, then
+// the remaining tiles one by one.
+template <std::size_t Count, class T>
+void tiles(const descriptor_tiles<T>& f, const T* g, Eigen::Index g_stride,
+           std::vector<xsimd::batch<T>, xsimd::aligned_allocator<xsimd::batch<T>>>& gb, T* out,
+           bool add) {
+  using batch = xsimd::batch<T>;
+  constexpr std::size_t per_block = Count >= 3 ? 3 : (Count == 2 ? 4 : 8);
+  const Eigen::Index dim = f.dimension();
+  constexpr auto n = static_cast<Eigen::Index>(Count);
+  gb.resize(static_cast<std::size_t>(n * dim));
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (Eigen::Index k = 0; k < dim; ++k)
+      gb[static_cast<std::size_t>(j * dim + k)] = batch(g[j * g_stride + k]);
+  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+  const Eigen::Index count = (f.positions() + width - 1) / width;
+  Eigen::Index t = 0;
+  constexpr auto step = static_cast<Eigen::Index>(per_block);
+  for (; t + step <= count; t += step) block<per_block, Count>(f, t, gb.data(), out, add);
+  for (; t < count; ++t) block<1, Count>(f, t, gb.data(), out, add);
+}
+
 }  // namespace distance_kernel
 
+/// out(q) (+)= sum_{n in [first, first+count)} || F(q) - g.col(n) || for every position q: added
+/// to out when `add`, else stored (saves clearing a buffer that is about to be overwritten).
 template <class T>
 void accumulate_distances(const descriptor_tiles<T>& f,
                           const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g,
-                          Eigen::Index first, Eigen::Index count, T* out) {
+                          Eigen::Index first, Eigen::Index count, T* out, bool add = true) {
   const Eigen::Index stride = g.rows();
+  // Pre-broadcast tactile descriptors; a few KB, allocated per call (negligible next to the
+  // pass over the map's descriptors).
+  std::vector<xsimd::batch<T>, xsimd::aligned_allocator<xsimd::batch<T>>> gb;
   for (Eigen::Index n = first; n < first + count;) {
     const T* gn = g.data() + n * stride;
     switch (std::min<Eigen::Index>(first + count - n, 3)) {
       case 3:
-        distance_kernel::tiles<3>(f, gn, stride, out);
+        distance_kernel::tiles<3>(f, gn, stride, gb, out, add);
         n += 3;
         break;
       case 2:
-        distance_kernel::tiles<2>(f, gn, stride, out);
+        distance_kernel::tiles<2>(f, gn, stride, gb, out, add);
         n += 2;
         break;
       default:
-        distance_kernel::tiles<1>(f, gn, stride, out);
+        distance_kernel::tiles<1>(f, gn, stride, gb, out, add);
         n += 1;
         break;
     }
+    add = true;  // later descriptors add to the first ones' sums
   }
 }
 
