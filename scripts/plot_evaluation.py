@@ -34,8 +34,10 @@ def quantile(values, q):
 
 
 def load(path):
-    # runs[map][config][sequence] = list of rows in touch order
+    # runs[map][config][sequence] = list of rows in touch order; scenarios[map] = the simulation
+    # scenarios its rows were run in (CSV column "scenario"; older CSVs have none)
     runs = defaultdict(lambda: defaultdict(lambda: defaultdict(list)))
+    scenarios = defaultdict(set)
     with open(path, newline="") as f:
         reader = csv.DictReader(f)
         needed = {"map", "config", "sequence", "touch", "error_mm", "localized", "touches_to_localize"}
@@ -45,15 +47,19 @@ def load(path):
                      "expected a CSV written by tacmap-evaluate")
         for row in reader:
             runs[row["map"]][row["config"]][int(row["sequence"])].append(row)
+            if row.get("scenario"):
+                scenarios[row["map"]].add(row["scenario"])
     for configs in runs.values():
         for seqs in configs.values():
             for rows in seqs.values():
                 rows.sort(key=lambda r: int(r["touch"]))
-    return runs
+    return runs, scenarios
 
 
-def plot_map(name, configs, out):
+def plot_map(name, configs, out, label=None):
+    """`label`: the map's name in titles (default `name`); files are named after `name`."""
     written = []
+    title = label or name
     # Fig. 6: error vs touch.
     fig, ax = plt.subplots(figsize=(12, 6))
     colours = plt.get_cmap("tab20")
@@ -76,7 +82,7 @@ def plot_map(name, configs, out):
     ax.axhline(5.0, color="k", linestyle="--", linewidth=1, label="5 mm (localized)")
     ax.set_xlabel("touch")
     ax.set_ylabel("error of the MAP estimate (mm)")
-    ax.set_title(f"{name}: error per touch (median" + (", 25-75 % band)" if bands else ")"))
+    ax.set_title(f"{title}: error per touch (median" + (", 25-75 % band)" if bands else ")"))
     ax.set_yscale("symlog", linthresh=5.0)
     ax.set_ylim(bottom=0.0)
     ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
@@ -98,7 +104,7 @@ def plot_map(name, configs, out):
     ax.axvline(5.0, color="k", linestyle="--", linewidth=1)
     ax.set_xlabel("final error (mm)")
     ax.set_ylabel("sequences")
-    ax.set_title(f"{name}: final error per sequence")
+    ax.set_title(f"{title}: final error per sequence")
     ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     path = os.path.join(out, f"{name}_final_error_hist.png")
     fig.tight_layout()
@@ -117,7 +123,7 @@ def plot_map(name, configs, out):
             label=[f"{c} ({len(v)} localized)" for c, v in ttl.items()])
     ax.set_xlabel("touches to localize (error < 5 mm from then on)")
     ax.set_ylabel("sequences")
-    ax.set_title(f"{name}: touches to localize (localized sequences)")
+    ax.set_title(f"{title}: touches to localize (localized sequences)")
     ax.set_xticks(range(1, n_touch + 1))
     ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     path = os.path.join(out, f"{name}_touches_to_localize.png")
@@ -137,7 +143,7 @@ def main():
     args = parser.parse_args()
     if not os.path.isfile(args.csv):
         sys.exit(f"plot_evaluation: '{args.csv}' does not exist; expected tacmap-evaluate's CSV")
-    runs = load(args.csv)
+    runs, scenarios = load(args.csv)
     if not runs:
         sys.exit(f"plot_evaluation: '{args.csv}' has no data rows")
     os.makedirs(args.out, exist_ok=True)
@@ -146,7 +152,8 @@ def main():
             configs = {c: v for c, v in configs.items() if any(f in c for f in args.config)}
             if not configs:
                 sys.exit(f"plot_evaluation: no configuration matches {args.config}")
-        for path in plot_map(name, configs, args.out):
+        label = f"{name} ({', '.join(sorted(scenarios[name]))} scenario)" if scenarios[name] else name
+        for path in plot_map(name, configs, args.out, label):
             print(os.path.abspath(path))
 
 

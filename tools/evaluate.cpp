@@ -12,7 +12,14 @@
 // generated protocol — 7 random touch locations, 22 random orders, odometry noise 0.5 mm per
 // axis — all fixed by --seed. Everything (simulator noise included) is reproducible from --seed.
 //
+// Scenarios (sim/scenario.hpp): --scenario ideal (default) presses the map's own image with a
+// new sensor; --scenario realistic makes the map a camera image (texture, illumination,
+// shading, blur, noise, gamma), misregisters the object by ~1 mm / 1 degree per sequence,
+// jitters every press (orientation, tilt, depth) and uses a worn sensor. Every effect has its
+// own option, applied on top of the scenario (e.g. --scenario realistic --camera-gamma 1).
+//
 //   tacmap-evaluate --photo camera.png --model sift_lite,ncc --output eval.csv
+//   tacmap-evaluate --scenario realistic --model ncc --tau 0.05,0.1,0.2
 #include <CLI/CLI.hpp>
 
 #define STB_IMAGE_IMPLEMENTATION
@@ -46,6 +53,7 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <optional>
@@ -55,6 +63,7 @@
 #include "tacmap/sim/experiment.hpp"
 #include "tacmap/sim/protocol.hpp"
 #include "tacmap/sim/random.hpp"
+#include "tacmap/sim/scenario.hpp"
 
 #ifndef TACMAP_DATA_DIR
 #define TACMAP_DATA_DIR "data"
@@ -189,13 +198,46 @@ int main(int argc, char** argv) try {
       features{"per_window"};
   std::size_t max_sequences = 0;
   std::uint64_t seed = 1;
-  std::optional<double> tau;
+  std::vector<double> taus;
+  std::string scenario_name = "ideal";
   double tempering = 1.0, motion_sigma = 1.0;
   int motion_k = 8;
   std::string output = "evaluation.csv";
   double min_success = -1.0;
   bool quiet = false;
-  tacmap::simulator_params sim;  // the simulated sensor's physics (defaults: the paper's array)
+  // Overrides of the scenario's knobs: empty = the scenario's value.
+  struct knob {
+    const char* flag;
+    const char* help;
+    double lo, hi;
+    std::optional<double> value;
+  };
+  std::vector<knob> sensor_knobs{
+      {"--noise-counts", "sensor read-out noise, counts (of 4095)", 0.0, 4095.0, {}},
+      {"--gain-variation", "relative per-taxel gain spread", 0.0, 10.0, {}},
+      {"--dead-fraction", "fraction of dead taxels", 0.0, 1.0, {}},
+      {"--press-depth", "indentation of the highest point, mm", 0.0, 100.0, {}},
+      {"--foam-sigma", "load spread by the foam cover, mm", 0.0, 100.0, {}},
+  };
+  std::vector<knob> scenario_knobs{
+      {"--albedo-variation",
+       "camera map: relative std of the print's surface texture",
+       0.0,
+       1.0,
+       {}},
+      {"--albedo-scale", "camera map: texture grain, map px", 0.0, 100.0, {}},
+      {"--illumination-gradient", "camera map: peak-to-peak illumination change", 0.0, 1.9, {}},
+      {"--shading", "camera map: fraction of directional light (0 = diffuse)", 0.0, 1.0, {}},
+      {"--light-elevation", "camera map: light's elevation, degrees", 1.0, 90.0, {}},
+      {"--camera-blur", "camera map: blur sigma, map px", 0.0, 100.0, {}},
+      {"--camera-noise", "camera map: noise std (intensity of 1)", 0.0, 1.0, {}},
+      {"--camera-gamma", "camera map: tone-curve gamma (1 = linear)", 0.1, 10.0, {}},
+      {"--registration-shift", "object-to-map shift per sequence, mm", 0.0, 50.0, {}},
+      {"--registration-rotation", "object-to-map rotation per sequence, degrees", 0.0, 45.0, {}},
+      {"--orientation-jitter", "per-press orientation std, degrees", 0.0, 45.0, {}},
+      {"--tilt-jitter", "per-press tilt std, degrees", 0.0, 5.0, {}},
+      {"--press-depth-jitter", "per-press relative depth std", 0.0, 1.0, {}},
+  };
   app.add_option("--gecko", gecko_dir, "folder of the gecko protocol (protocol.txt)");
   app.add_flag("--no-gecko", no_gecko, "do not evaluate on the gecko");
   app.add_option("--photo", photos, "photograph(s) to use as maps (PNG/JPEG/PGM)")
@@ -208,7 +250,9 @@ int main(int argc, char** argv) try {
   app.add_option("--sequences", max_sequences,
                  "run only the first N sequences of each map (0 = all)");
   app.add_option("--seed", seed, "seeds the simulator and the photographs' protocols");
-  app.add_option("--tau", tau, "temperature (exponential shape / NCC); default: the model's");
+  app.add_option("--tau", taus,
+                 "temperature(s) (exponential shape / NCC), comma-separated; default: the model's")
+      ->delimiter(',');
   app.add_option("--tempering", tempering, "exponent on the likelihood")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--motion-sigma", motion_sigma, "odometry noise sigma, mm")
@@ -219,15 +263,52 @@ int main(int argc, char** argv) try {
       "--min-success-rate", min_success,
       "exit 1 when any map x configuration localizes fewer than this fraction of sequences");
   app.add_flag("--quiet,-q", quiet, "no progress bar");
-  app.add_option("--noise-counts", sim.noise_counts, "sensor read-out noise, counts (of 4095)")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--gain-variation", sim.gain_variation, "relative per-taxel gain spread")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--dead-fraction", sim.dead_fraction, "fraction of dead taxels")
-      ->check(CLI::Range(0.0, 1.0));
-  app.add_option("--press-depth", sim.press_depth_mm, "indentation of the highest point, mm")
-      ->check(CLI::NonNegativeNumber);
+  app.add_option("--scenario", scenario_name,
+                 "ideal (the map's own image, a new sensor) or realistic (camera map, "
+                 "misregistration, press jitter, worn sensor; sim/scenario.hpp)");
+  for (auto* knobs : {&sensor_knobs, &scenario_knobs})
+    for (auto& k : *knobs)
+      app.add_option(k.flag, k.value, std::string(k.help) + " (default: the scenario's)")
+          ->check(CLI::Range(k.lo, k.hi));
   CLI11_PARSE(app, argc, argv);
+
+  const auto scenario = parse_choice<tacmap::scenario_kind>(
+      "--scenario", scenario_name,
+      {{"ideal", tacmap::scenario_kind::ideal}, {"realistic", tacmap::scenario_kind::realistic}});
+  tacmap::simulator_params sim;  // the simulated sensor's physics (defaults: the paper's array)
+  tacmap::scenario_params effects;
+  if (scenario == tacmap::scenario_kind::realistic) {
+    sim = tacmap::realistic_sensor(sim);
+    effects = tacmap::scenario_params::realistic();
+  }
+  const auto set = [](const knob& k, auto& field) {
+    if (k.value) field = *k.value;
+  };
+  set(sensor_knobs[0], sim.noise_counts);
+  set(sensor_knobs[1], sim.gain_variation);
+  set(sensor_knobs[2], sim.dead_fraction);
+  set(sensor_knobs[3], sim.press_depth_mm);
+  set(sensor_knobs[4], sim.foam_sigma_mm);
+  double* const fields[] = {&effects.albedo_variation,       &effects.albedo_scale_px,
+                            &effects.illumination_gradient,  &effects.shading,
+                            &effects.light_elevation_deg,    &effects.camera_blur_px,
+                            &effects.camera_noise,           &effects.camera_gamma,
+                            &effects.registration_shift_mm,  &effects.registration_rotation_deg,
+                            &effects.orientation_jitter_deg, &effects.tilt_jitter_deg,
+                            &effects.press_depth_jitter};
+  static_assert(std::size(fields) == 13);
+  for (std::size_t i = 0; i < std::size(fields); ++i) set(scenario_knobs[i], *fields[i]);
+  sim.validate();
+  effects.validate();
+  std::vector<std::optional<double>> tau_values;
+  for (const double t : taus) {
+    if (!(std::isfinite(t) && t > 0.0))
+      throw CLI::ValidationError("--tau", csv_number(t) +
+                                              " is not a temperature; expected finite values > 0 "
+                                              "(e.g. --tau 0.5,1,2)");
+    tau_values.emplace_back(t);
+  }
+  if (tau_values.empty()) tau_values.emplace_back();  // the model's own default
 
   // Configurations: the cross product; NCC once (pairing, shape and features do not apply).
   std::vector<tacmap::localization_config> configs;
@@ -239,33 +320,47 @@ int main(int argc, char** argv) try {
                                                 {"ncc", tacmap::measurement_kind::ncc}});
     tacmap::localization_config base;
     base.model = kind;
-    base.tau = tau;
     base.tempering = tempering;
     base.motion_sigma_mm = motion_sigma;
     base.motion_k = motion_k;
     base.simulator_seed = seed;
     base.simulator = sim;
+    base.scenario = effects;
     if (kind == tacmap::measurement_kind::ncc) {
-      configs.push_back(base);
+      for (const auto& t : tau_values) {
+        auto c = base;
+        c.tau = t;
+        configs.push_back(c);
+      }
       continue;
     }
     for (const auto& pr : pairings)
       for (const auto& sh : shapes)
-        for (const auto& fe : features) {
-          auto c = base;
-          c.pairs = parse_choice<tacmap::pairing>(
-              "--pairing", pr,
-              {{"all_pairs", tacmap::pairing::all_pairs}, {"aligned", tacmap::pairing::aligned}});
-          c.shape = parse_choice<tacmap::likelihood_shape>(
-              "--shape", sh,
-              {{"inverse", tacmap::likelihood_shape::inverse},
-               {"exponential", tacmap::likelihood_shape::exponential}});
-          c.features = parse_choice<tacmap::window_features>(
-              "--features", fe,
-              {{"per_window", tacmap::window_features::per_window},
-               {"shared_dense", tacmap::window_features::shared_dense}});
-          configs.push_back(c);
-        }
+        for (const auto& fe : features)
+          for (const auto& t : tau_values) {
+            auto c = base;
+            c.tau = t;
+            c.pairs = parse_choice<tacmap::pairing>(
+                "--pairing", pr,
+                {{"all_pairs", tacmap::pairing::all_pairs}, {"aligned", tacmap::pairing::aligned}});
+            c.shape = parse_choice<tacmap::likelihood_shape>(
+                "--shape", sh,
+                {{"inverse", tacmap::likelihood_shape::inverse},
+                 {"exponential", tacmap::likelihood_shape::exponential}});
+            c.features = parse_choice<tacmap::window_features>(
+                "--features", fe,
+                {{"per_window", tacmap::window_features::per_window},
+                 {"shared_dense", tacmap::window_features::shared_dense}});
+            // tau only acts on the exponential shape: one inverse configuration, not one per tau.
+            if (c.shape == tacmap::likelihood_shape::inverse) {
+              c.tau.reset();
+              const auto same = [&](const tacmap::localization_config& o) {
+                return o.name() == c.name();
+              };
+              if (std::any_of(configs.begin(), configs.end(), same)) continue;
+            }
+            configs.push_back(c);
+          }
   }
 
   std::vector<named_map> maps;
@@ -284,7 +379,8 @@ int main(int argc, char** argv) try {
     tacmap::detail::fail<std::runtime_error>("tacmap-evaluate: cannot open '", output,
                                              "' for writing; check the folder exists");
   csv << "map,config,model,pairing,shape,features,sequence,touch,location,true_x_mm,true_y_mm,"
-         "map_x_mm,map_y_mm,error_mm,entropy_nats,accepted,localized,touches_to_localize\n";
+         "map_x_mm,map_y_mm,error_mm,entropy_nats,accepted,localized,touches_to_localize,scenario,"
+         "tau\n";
 
   std::size_t total = 0;
   for (const auto& m : maps) {
@@ -293,6 +389,7 @@ int main(int argc, char** argv) try {
   }
   std::size_t done = 0;
   bool below_floor = false;
+  std::fprintf(stderr, "scenario: %s\n", to_string(scenario));
   std::printf(
       "| map | configuration | localized | median touches to localize | median final error mm | "
       "median final entropy nats |\n");
@@ -329,7 +426,8 @@ int main(int argc, char** argv) try {
               << csv_number(r.map_x_mm) << ',' << csv_number(r.map_y_mm) << ','
               << csv_number(r.error_mm) << ',' << csv_number(r.entropy_nats) << ','
               << (r.accepted ? 1 : 0) << ',' << (ok ? 1 : 0) << ','
-              << (t ? std::to_string(*t) : std::string()) << '\n';
+              << (t ? std::to_string(*t) : std::string()) << ',' << to_string(scenario) << ','
+              << (config.tau ? csv_number(*config.tau) : std::string()) << '\n';
         ++done;
         if (!quiet) progress(done, total, m.name + " " + config.name());
       }

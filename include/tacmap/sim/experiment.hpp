@@ -13,6 +13,11 @@
 // first touch (1-based) from which the error stays below the threshold; Fig. 6 plots the error
 // per touch across the 22 sequences (we report the median).
 //
+// A scenario (`localization_config::scenario`, sim/scenario.hpp) makes the run realistic: the
+// measurement model matches against a camera image of the object (`visual_map()`) while the
+// simulator still presses the object's true relief, off by the sequence's registration error
+// and each press's jitter. The ideal scenario (the default) changes nothing.
+//
 // `localization_experiment` builds the (expensive: per-window descriptors of every window)
 // measurement model once per map and configuration and reuses it for every sequence by resetting
 // the filter.
@@ -22,7 +27,9 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <variant>
@@ -37,6 +44,7 @@
 #include "tacmap/motion/odometry_gaussian.hpp"
 #include "tacmap/sim/protocol.hpp"
 #include "tacmap/sim/random.hpp"
+#include "tacmap/sim/scenario.hpp"
 #include "tacmap/sim/tactile_simulator.hpp"
 #include "tacmap/tactile/preprocess.hpp"
 
@@ -86,13 +94,23 @@ struct localization_config {
   int motion_k = 8;                  ///< odometry_gaussian neighbours (paper: 8)
   std::uint64_t simulator_seed = 1;  ///< seeds the simulator; each sequence forks its own stream
   simulator_params simulator{};  ///< the simulator's physics (its seed is replaced per sequence)
+  /// Camera map, registration and per-press effects (sim/scenario.hpp); ideal by default.
+  scenario_params scenario{};
   preprocess_params preprocessing{};  ///< thresholds; mm_per_px is replaced by the map's
 
-  /// A short name for tables: "sift_lite/all_pairs/inverse/per_window".
+  /// A short name for tables: "sift_lite/all_pairs/inverse/per_window", with "/tau=0.5" when
+  /// `tau` is set.
   [[nodiscard]] std::string name() const {
-    if (model == measurement_kind::ncc) return "ncc";
-    return std::string(to_string(model)) + "/" + to_string(pairs) + "/" + to_string(shape) + "/" +
-           to_string(features);
+    std::string out = model == measurement_kind::ncc
+                          ? std::string("ncc")
+                          : std::string(to_string(model)) + "/" + to_string(pairs) + "/" +
+                                to_string(shape) + "/" + to_string(features);
+    if (tau) {
+      std::ostringstream t;
+      t << *tau;
+      out += "/tau=" + t.str();
+    }
+    return out;
   }
 };
 
@@ -222,14 +240,21 @@ class localization_experiment {
         config_(std::move(config)),
         window_(checked_window(protocol, config_)),
         relief_(protocol.relief_mm()),
+        visual_map_(camera_image(protocol.map, relief_, protocol.mm_per_px, config_.scenario,
+                                 scenario_seed(config_.simulator_seed, 0))),
+        margin_px_(config_.scenario.moves_sensor() ? margin_px(protocol, config_) : 0),
+        pressed_relief_(margin_px_ > 0 ? padded(relief_, margin_px_) : relief_),
         filter_(planar_grid<float>(protocol.map_size(), protocol.mm_per_px, window_),
                 odometry_gaussian({.sigma_mm = config_.motion_sigma_mm, .k = config_.motion_k}),
-                configured_measurement(config_, protocol.map, window_)) {
+                configured_measurement(config_, visual_map_, window_)) {
     config_.preprocessing.mm_per_px = protocol.mm_per_px;
   }
 
   [[nodiscard]] const localization_config& config() const { return config_; }
   [[nodiscard]] const filter_type& filter() const { return filter_; }
+  /// The map the measurement model matches against: the protocol's image, or what the
+  /// scenario's camera makes of it.
+  [[nodiscard]] const image<float>& visual_map() const { return visual_map_; }
 
   /// Replays sequence `index` of the protocol. `keep_images`: also return every preprocessed
   /// tactile image and belief image. Throws std::invalid_argument for an index out of range.
@@ -245,7 +270,23 @@ class localization_experiment {
     simulator_params sp = config_.simulator;
     std::uint64_t s = config_.simulator_seed ^ (0x9E3779B97F4A7C15ULL * (index + 1));
     sp.seed = splitmix64(s);
-    tactile_simulator simulator(relief_, protocol_->map_size(), protocol_->mm_per_px, sp);
+    // The relief pressed on, padded (edge heights continued) when the scenario moves the
+    // sensor, so that a shifted or turned footprint near the map's border still lies on it.
+    const double offset_mm = static_cast<double>(margin_px_) * protocol_->mm_per_px;
+    tactile_simulator simulator(pressed_relief_,
+                                {protocol_->map_size().width + 2 * margin_px_,
+                                 protocol_->map_size().height + 2 * margin_px_},
+                                protocol_->mm_per_px, sp);
+    // Registration error of this sequence and the stream of per-press variations.
+    const scenario_params& sc = config_.scenario;
+    sim_rng scenario_rng(scenario_seed(config_.simulator_seed, index + 1));
+    const double pi = std::numbers::pi;
+    const double shift_angle = 2.0 * pi * scenario_rng.uniform();
+    const double rotation =
+        (scenario_rng.uniform() < 0.5 ? -1.0 : 1.0) * sc.registration_rotation_deg * pi / 180.0;
+    const double cx = 0.5 * static_cast<double>(protocol_->map_size().width) * protocol_->mm_per_px;
+    const double cy =
+        0.5 * static_cast<double>(protocol_->map_size().height) * protocol_->mm_per_px;
 
     filter_.reset();
     sequence_result result;
@@ -254,8 +295,28 @@ class localization_experiment {
       const protocol_step& st = sequence[step];
       const touch_location& truth = protocol_->locations.at(st.location);
       if (step > 0) filter_.predict(st.measured_motion);
+      // Where the sensor really presses on the object: the true map pose carried by the
+      // registration error, turned by this press's orientation jitter; and how it presses.
+      map_pose pressed = truth.pose();
+      press_variation press;
+      if (sc.moves_sensor()) {
+        const double dx = pressed.x_mm - cx, dy = pressed.y_mm - cy;
+        pressed.x_mm = cx + dx * std::cos(rotation) - dy * std::sin(rotation) +
+                       sc.registration_shift_mm * std::cos(shift_angle);
+        pressed.y_mm = cy + dx * std::sin(rotation) + dy * std::cos(rotation) +
+                       sc.registration_shift_mm * std::sin(shift_angle);
+        // Draws are made whatever their size, so one knob does not reshuffle the others.
+        const double jitter = scenario_rng.normal(), tilt_u = scenario_rng.normal(),
+                     tilt_v = scenario_rng.normal(), depth = scenario_rng.normal();
+        pressed.theta_rad += rotation + sc.orientation_jitter_deg * pi / 180.0 * jitter;
+        press.tilt_u_rad = std::clamp(sc.tilt_jitter_deg * pi / 180.0 * tilt_u, -0.4, 0.4);
+        press.tilt_v_rad = std::clamp(sc.tilt_jitter_deg * pi / 180.0 * tilt_v, -0.4, 0.4);
+        press.depth_scale = std::max(0.2, 1.0 + sc.press_depth_jitter * depth);
+        pressed.x_mm += offset_mm;
+        pressed.y_mm += offset_mm;
+      }
       const preprocessed_frame pre =
-          preprocess(simulator.render(truth.pose()), config_.preprocessing);
+          preprocess(simulator.render(pressed, press), config_.preprocessing);
       touch_record rec;
       rec.step = step;
       rec.location = st.location;
@@ -288,10 +349,47 @@ class localization_experiment {
     return w;
   }
 
+  // Seeds of the scenario's draws: stream 0 for the camera map, index + 1 for sequence index;
+  // independent of the simulator's own streams.
+  static std::uint64_t scenario_seed(std::uint64_t seed, std::size_t stream) {
+    std::uint64_t s = seed ^ 0xD1B54A32D192ED03ULL ^ (0xBF58476D1CE4E5B9ULL * (stream + 1));
+    return splitmix64(s);
+  }
+
+  // Margin (map px) that keeps the pressed footprint on the padded relief: the registration's
+  // displacement anywhere on the map plus the footprint's growth at any orientation.
+  static Eigen::Index margin_px(const touch_protocol& p, const localization_config& c) {
+    c.scenario.validate();
+    const double w = 0.5 * static_cast<double>(p.map.cols()) * p.mm_per_px;
+    const double h = 0.5 * static_cast<double>(p.map.rows()) * p.mm_per_px;
+    const taxel_geometry& g = c.simulator.geometry;
+    const auto cols = static_cast<double>(g.cols), rows = static_cast<double>(g.rows);
+    const double half_diagonal = 0.5 * g.pitch_mm * std::hypot(cols, rows);
+    const double half_short = 0.5 * g.pitch_mm * std::min(cols, rows);
+    const double mm =
+        c.scenario.registration_shift_mm +
+        std::hypot(w, h) * c.scenario.registration_rotation_deg * std::numbers::pi / 180.0 +
+        (half_diagonal - half_short) + 2.0 * p.mm_per_px;
+    return static_cast<Eigen::Index>(std::ceil(mm / p.mm_per_px));
+  }
+
+  // `relief` with `m` pixels added on every side, repeating the edge heights.
+  static image<float> padded(const image<float>& relief, Eigen::Index m) {
+    image<float> out(relief.rows() + 2 * m, relief.cols() + 2 * m);
+    for (Eigen::Index r = 0; r < out.rows(); ++r)
+      for (Eigen::Index c = 0; c < out.cols(); ++c)
+        out(r, c) = relief(std::clamp<Eigen::Index>(r - m, 0, relief.rows() - 1),
+                           std::clamp<Eigen::Index>(c - m, 0, relief.cols() - 1));
+    return out;
+  }
+
   const touch_protocol* protocol_;
   localization_config config_;
   pixel_size window_;
   image<float> relief_;
+  image<float> visual_map_;
+  Eigen::Index margin_px_;
+  image<float> pressed_relief_;
   filter_type filter_;
 };
 

@@ -11,7 +11,8 @@
 //  1. Contact. The sensor plane is lowered onto the relief until the highest point under the
 //     sensor is indented by `press_depth_mm`; every point under the sensor is indented by
 //     max(0, height - plane height). A rigid plane on a rigid object: what is lower than the
-//     plane is not touched.
+//     plane is not touched. A `press_variation` scales the depth and tilts the plane for one
+//     touch (sim/scenario.hpp draws them).
 //  2. Cell integration. Each taxel reports the mean indentation over its square cell, sampled
 //     at `supersample` x `supersample` points with bilinear interpolation of the relief.
 //  3. Foam. The elastic cover spreads load to neighbouring cells: a Gaussian over taxels with
@@ -61,6 +62,29 @@ struct map_pose {
   double x_mm = 0.0;
   double y_mm = 0.0;
   double theta_rad = 0.0;  ///< 0: the array's rows run along the map's y axis (see file comment)
+};
+
+/// How one press departs from the nominal one (the realistic scenario's per-touch effects,
+/// sim/scenario.hpp): an arm or a hand never presses twice with the same force, nor holds the
+/// array exactly parallel to the surface. The default is the nominal press.
+struct press_variation {
+  double depth_scale = 1.0;  ///< multiplies `simulator_params::press_depth_mm`, >= 0
+  double tilt_u_rad = 0.0;   ///< slope of the array's plane along its column (u) axis
+  double tilt_v_rad = 0.0;   ///< slope of the array's plane along its row (v) axis
+
+  void validate() const {
+    if (!(std::isfinite(depth_scale) && depth_scale >= 0.0))
+      detail::fail("press_variation: depth_scale = ", depth_scale,
+                   "; expected a finite factor >= 0 on the press depth (1 = nominal)");
+    const auto tilt = [](const char* name, double value) {
+      if (!(std::isfinite(value) && std::abs(value) < 0.5))
+        detail::fail("press_variation: ", name, " = ", value,
+                     " rad; expected a finite tilt of magnitude < 0.5 rad (a few degrees is "
+                     "realistic; beyond that the array would not lie on the surface)");
+    };
+    tilt("tilt_u_rad", tilt_u_rad);
+    tilt("tilt_v_rad", tilt_v_rad);
+  }
 };
 
 /// How an image's intensity becomes a relief.
@@ -304,8 +328,14 @@ class tactile_simulator {
   }
 
   /// Steps 1-2: mean indentation (mm) of every taxel's cell, before the foam spreads it.
-  [[nodiscard]] image<float> indentation_mm(const map_pose& pose) const {
+  /// `press`: this touch's depth and tilt (a tilted array is a tilted plane: the highest point
+  /// of height minus plane is indented by the press depth).
+  [[nodiscard]] image<float> indentation_mm(const map_pose& pose,
+                                            const press_variation& press = {}) const {
     check_pose(pose);
+    press.validate();
+    const double slope_u = std::tan(press.tilt_u_rad);
+    const double slope_v = std::tan(press.tilt_v_rad);
     const taxel_geometry& g = params_.geometry;
     const int n = params_.supersample;
     const double pitch = g.pitch_mm;
@@ -326,9 +356,13 @@ class tactile_simulator {
                 (static_cast<double>(c) - c0 + (static_cast<double>(b) + 0.5) / n - 0.5) * pitch;
             const double v =
                 (static_cast<double>(r) - r0 + (static_cast<double>(a) + 0.5) / n - 0.5) * pitch;
-            heights(k++) = sample(pose.x_mm + u * cs - v * sn, pose.y_mm + u * sn + v * cs);
+            // Height above the (possibly tilted) sensor plane through the centre.
+            heights(k++) = static_cast<float>(
+                sample(pose.x_mm + u * cs - v * sn, pose.y_mm + u * sn + v * cs) -
+                (u * slope_u + v * slope_v));
           }
-    const float plane = heights.maxCoeff() - static_cast<float>(params_.press_depth_mm);
+    const float plane =
+        heights.maxCoeff() - static_cast<float>(params_.press_depth_mm * press.depth_scale);
     image<float> out(g.rows, g.cols);
     for (Eigen::Index t = 0; t < g.rows * g.cols; ++t)
       out.data()[t] = (heights.segment(t * per_taxel, per_taxel) - plane).max(0.0F).mean();
@@ -336,8 +370,9 @@ class tactile_simulator {
   }
 
   /// Steps 1-4 and dead taxels: the noiseless, unquantised, unsaturated counts.
-  [[nodiscard]] image<float> expected_counts(const map_pose& pose) const {
-    image<float> load = indentation_mm(pose);
+  [[nodiscard]] image<float> expected_counts(const map_pose& pose,
+                                             const press_variation& press = {}) const {
+    image<float> load = indentation_mm(pose, press);
     detail::simulation::gaussian_blur(load, params_.foam_sigma_mm / params_.geometry.pitch_mm);
     image<float> counts = (load.cast<double>() * params_.gain_counts_per_mm).cast<float>() * gain_;
     return dead_.select(0.0F, counts);
@@ -345,8 +380,8 @@ class tactile_simulator {
 
   /// One frame as the sensor reports it: expected counts plus noise on loaded taxels, rounded,
   /// saturated, dead taxels at 0. Advances the noise stream and the frame number.
-  [[nodiscard]] tactile_frame render(const map_pose& pose) {
-    const image<float> expected = expected_counts(pose);
+  [[nodiscard]] tactile_frame render(const map_pose& pose, const press_variation& press = {}) {
+    const image<float> expected = expected_counts(pose, press);
     tactile_frame frame;
     frame.geometry = params_.geometry;
     frame.counts.resize(expected.rows(), expected.cols());
