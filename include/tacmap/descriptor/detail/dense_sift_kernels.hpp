@@ -177,26 +177,19 @@ void weighted_sum(const T* const* sources, const T* weights, std::size_t taps, T
   }
 }
 
-/// Gradients (gx along columns, gy along rows, y downwards) of `img / scale` with Lazebnik's
-/// border handling: 2 mirrored pixels, the mean of that padded image subtracted, zero beyond
-/// (which only a kernel wider than 5 px, sigma_edge > 1, reaches).
-///
-/// Both passes run over the padded image as one flat array (a row's last 2 * radius outputs
-/// are scratch), so a short tactile row costs no per-row call. Pixel (y, x) of the result is at
-/// y * stride + x with the returned stride = cols + 2 * radius; columns >= cols are scratch.
+/// The image divided by `scale`, mirrored by `mirror_pad` pixels, its mean subtracted and
+/// surrounded by zeros to `radius` pixels per side: (h + 2 radius) rows of w + 2 radius,
+/// followed by `extra` zeros (room for readers that overrun the last row).
 template <class T>
-Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>& taps,
-                       Eigen::Array<T, Eigen::Dynamic, 1>& gx,
-                       Eigen::Array<T, Eigen::Dynamic, 1>& gy) {
+void padded_image(const image_view<T>& img, T scale, Eigen::Index radius, Eigen::Index extra,
+                  Eigen::Array<T, Eigen::Dynamic, 1>& padded) {
   using row_map = Eigen::Map<Eigen::Array<T, Eigen::Dynamic, 1>>;
   const Eigen::Index h = img.rows();
   const Eigen::Index w = img.cols();
-  const Eigen::Index r = taps.radius;
-  const Eigen::Index hp = h + 2 * r;
+  const Eigen::Index r = radius;
   const Eigen::Index wp = w + 2 * r;
   const Eigen::Index m = mirror_pad;
-
-  Eigen::Array<T, Eigen::Dynamic, 1> padded = Eigen::Array<T, Eigen::Dynamic, 1>::Zero(hp * wp);
+  padded = Eigen::Array<T, Eigen::Dynamic, 1>::Zero((h + 2 * r) * wp + extra);
   double sum = 0.0;
   for (Eigen::Index y = -m; y < h + m; ++y) {
     T* out = padded.data() + (y + r) * wp + r;
@@ -213,6 +206,26 @@ Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>
   for (Eigen::Index y = -m; y < h + m; ++y) {
     row_map(padded.data() + (y + r) * wp + r - m, w + 2 * m) -= mean;
   }
+}
+
+/// Gradients (gx along columns, gy along rows, y downwards) of `img / scale` with Lazebnik's
+/// border handling: 2 mirrored pixels, the mean of that padded image subtracted, zero beyond
+/// (which only a kernel wider than 5 px, sigma_edge > 1, reaches).
+///
+/// Both passes run over the padded image as one flat array (a row's last 2 * radius outputs
+/// are scratch), so a short tactile row costs no per-row call. Pixel (y, x) of the result is at
+/// y * stride + x with the returned stride = cols + 2 * radius; columns >= cols are scratch.
+template <class T>
+Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>& taps,
+                       Eigen::Array<T, Eigen::Dynamic, 1>& gx,
+                       Eigen::Array<T, Eigen::Dynamic, 1>& gy) {
+  const Eigen::Index h = img.rows();
+  const Eigen::Index w = img.cols();
+  const Eigen::Index r = taps.radius;
+  const Eigen::Index hp = h + 2 * r;
+  const Eigen::Index wp = w + 2 * r;
+  Eigen::Array<T, Eigen::Dynamic, 1> padded;
+  padded_image(img, scale, r, 0, padded);
 
   const auto n_taps = static_cast<std::size_t>(2 * r + 1);
   std::vector<const T*> src(n_taps);
@@ -238,13 +251,89 @@ Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>
   return wp;
 }
 
+/// Columns [begin, end) of one image row; empty when begin >= end.
+struct column_span {
+  Eigen::Index begin = 0;
+  Eigen::Index end = 0;
+};
+
+/// `gradients`, valid only at columns [spans[y].begin, spans[y].end) of each image row y (one
+/// span per row; other pixels of gx and gy are unspecified): the same padded image and the same
+/// sums, for the pixels a few patches need instead of all of them. Each pass runs row by row
+/// over the span, widened to whole registers (the widened columns land in the next row or the
+/// scratch columns and are never read as results) so that short spans have no scalar tail.
+template <class T>
+Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>& taps,
+                       const std::vector<column_span>& spans,
+                       Eigen::Array<T, Eigen::Dynamic, 1>& gx,
+                       Eigen::Array<T, Eigen::Dynamic, 1>& gy) {
+  constexpr Eigen::Index lane = 32 / static_cast<Eigen::Index>(sizeof(T));
+  const Eigen::Index h = img.rows();
+  const Eigen::Index w = img.cols();
+  const Eigen::Index r = taps.radius;
+  const Eigen::Index hp = h + 2 * r;
+  const Eigen::Index wp = w + 2 * r;
+  // A widened span reads at most lane - 1 + 2r past a row's last pixel.
+  const Eigen::Index overrun = lane + 2 * r;
+  Eigen::Array<T, Eigen::Dynamic, 1> padded;
+  padded_image(img, scale, r, overrun, padded);
+
+  // Output row y's widened span, and each padded row's: the hull of the output rows it feeds
+  // (padded row yp is tap yp - y of output row y, for yp - 2r <= y <= yp).
+  std::vector<column_span> out_span(static_cast<std::size_t>(h));
+  std::vector<column_span> pad_span(static_cast<std::size_t>(hp), {wp, 0});
+  for (Eigen::Index y = 0; y < h; ++y) {
+    column_span sp = spans[static_cast<std::size_t>(y)];
+    if (sp.begin >= sp.end) continue;
+    sp.end = sp.begin + (sp.end - sp.begin + lane - 1) / lane * lane;
+    out_span[static_cast<std::size_t>(y)] = sp;
+    for (Eigen::Index yp = y; yp <= y + 2 * r; ++yp) {
+      column_span& p = pad_span[static_cast<std::size_t>(yp)];
+      p.begin = std::min(p.begin, sp.begin);
+      p.end = std::max(p.end, sp.end);
+    }
+  }
+
+  const auto n_taps = static_cast<std::size_t>(2 * r + 1);
+  std::vector<const T*> src(n_taps);
+  Eigen::Array<T, Eigen::Dynamic, 1> dx(hp * wp + overrun);
+  Eigen::Array<T, Eigen::Dynamic, 1> sx(hp * wp + overrun);
+  for (Eigen::Index yp = 0; yp < hp; ++yp) {
+    const column_span sp = pad_span[static_cast<std::size_t>(yp)];
+    if (sp.begin >= sp.end) continue;
+    const Eigen::Index at = yp * wp + sp.begin;
+    for (std::size_t t = 0; t < n_taps; ++t) {
+      src[t] = padded.data() + at + static_cast<Eigen::Index>(t);
+    }
+    weighted_sum(src.data(), taps.derivative.data(), n_taps, dx.data() + at, sp.end - sp.begin);
+    weighted_sum(src.data(), taps.smooth.data(), n_taps, sx.data() + at, sp.end - sp.begin);
+  }
+  gx.resize(h * wp + overrun);
+  gy.resize(h * wp + overrun);
+  for (Eigen::Index y = 0; y < h; ++y) {
+    const column_span sp = out_span[static_cast<std::size_t>(y)];
+    if (sp.begin >= sp.end) continue;
+    const Eigen::Index at = y * wp + sp.begin;
+    for (std::size_t t = 0; t < n_taps; ++t) {
+      src[t] = dx.data() + at + static_cast<Eigen::Index>(t) * wp;
+    }
+    weighted_sum(src.data(), taps.smooth.data(), n_taps, gx.data() + at, sp.end - sp.begin);
+    for (std::size_t t = 0; t < n_taps; ++t) {
+      src[t] = sx.data() + at + static_cast<Eigen::Index>(t) * wp;
+    }
+    weighted_sum(src.data(), taps.derivative.data(), n_taps, gy.data() + at, sp.end - sp.begin);
+  }
+  return wp;
+}
+
 /// The channel loop for one choice of power (see `orientation_channels`).
 template <int NumAngles, class T, class Power>
 void orientation_channels_with(const Power& power, const Eigen::Array<T, Eigen::Dynamic, 1>& gx,
                                const Eigen::Array<T, Eigen::Dynamic, 1>& gy, Eigen::Index h,
                                Eigen::Index w, Eigen::Index stride, Eigen::Index margin,
                                const Eigen::Array<T, NumAngles, 1>& cos_a,
-                               const Eigen::Array<T, NumAngles, 1>& sin_a, T* channels) {
+                               const Eigen::Array<T, NumAngles, 1>& sin_a, const column_span* spans,
+                               T* channels) {
   using vec = Eigen::Array<T, NumAngles, 1>;
   using array = Eigen::Array<T, Eigen::Dynamic, 1>;
   const Eigen::Index row_size = (w + 2 * margin) * NumAngles;
@@ -252,20 +341,23 @@ void orientation_channels_with(const Power& power, const Eigen::Array<T, Eigen::
   array ux(w);
   array uy(w);
   for (Eigen::Index y = 0; y < h; ++y) {
+    const Eigen::Index x0 = spans == nullptr ? 0 : spans[y].begin;
+    const Eigen::Index n = spans == nullptr ? w : spans[y].end - x0;
+    if (n <= 0) continue;
     // Magnitude and unit gradient for the whole row (vectorised) ...
-    const Eigen::Map<const array> rx(gx.data() + y * stride, w);
-    const Eigen::Map<const array> ry(gy.data() + y * stride, w);
-    mag = (rx.square() + ry.square()).sqrt();
+    const Eigen::Map<const array> rx(gx.data() + y * stride + x0, n);
+    const Eigen::Map<const array> ry(gy.data() + y * stride + x0, n);
+    mag.head(n) = (rx.square() + ry.square()).sqrt();
     // 1 / max(mag, smallest normal) stays finite, and a zero gradient gives 0 * finite = 0.
     // (Eigen 3.4's select() is not vectorised; this is.)
-    uy = mag.max(std::numeric_limits<T>::min()).inverse();
-    ux = rx * uy;
-    uy *= ry;
+    uy.head(n) = mag.head(n).max(std::numeric_limits<T>::min()).inverse();
+    ux.head(n) = rx * uy.head(n);
+    uy.head(n) *= ry;
     // ... then all channels of a pixel at once (one register for 8 float channels). A zero
     // gradient has ux = uy = 0, so every channel is 0; the cosine is clamped to [0, 1] as
     // rounding may put it a hair above 1.
-    T* row = channels + (y + margin) * row_size + margin * NumAngles;
-    for (Eigen::Index x = 0; x < w; ++x) {
+    T* row = channels + (y + margin) * row_size + (x0 + margin) * NumAngles;
+    for (Eigen::Index x = 0; x < n; ++x) {
       vec c = (ux(x) * cos_a + uy(x) * sin_a).max(T(0)).min(T(1));
       power(c);
       Eigen::Map<vec>(row + x * NumAngles) = mag(x) * c;
@@ -281,13 +373,17 @@ void orientation_channels_with(const Power& power, const Eigen::Array<T, Eigen::
 /// Layout: pixel-major with `margin` zero pixels on every side, channel k of pixel (y, x) at
 /// ((y + margin) * (w + 2 margin) + x + margin) * NumAngles + k. The zeros are the "outside the
 /// image" of the pooling filter, so it needs no bounds checks.
+///
+/// With `spans` (one per image row), only the pixels in row y's span are computed (the gradients
+/// need only be valid there); the others are left unspecified, the margins are still zero.
 template <int NumAngles, class T>
 void orientation_channels(const Eigen::Array<T, Eigen::Dynamic, 1>& gx,
                           const Eigen::Array<T, Eigen::Dynamic, 1>& gy, Eigen::Index h,
                           Eigen::Index w, Eigen::Index stride, Eigen::Index margin,
                           const Eigen::Array<T, NumAngles, 1>& cos_a,
                           const Eigen::Array<T, NumAngles, 1>& sin_a, double alpha,
-                          Eigen::Array<T, Eigen::Dynamic, 1>& channels) {
+                          Eigen::Array<T, Eigen::Dynamic, 1>& channels,
+                          const column_span* spans = nullptr) {
   using array = Eigen::Array<T, Eigen::Dynamic, 1>;
   const Eigen::Index row_size = (w + 2 * margin) * NumAngles;
   channels.resize((h + 2 * margin) * row_size);
@@ -304,7 +400,7 @@ void orientation_channels(const Eigen::Array<T, Eigen::Dynamic, 1>& gx,
   const auto exponent = integral ? static_cast<unsigned>(alpha) : 0U;
   auto run = [&](const auto& power) {
     orientation_channels_with<NumAngles, T>(power, gx, gy, h, w, stride, margin, cos_a, sin_a,
-                                            channels.data());
+                                            spans, channels.data());
   };
   if (integral &&
       with_static_exponent(exponent, [&](auto e) { run(static_power<decltype(e)::value>{}); })) {
@@ -371,6 +467,75 @@ class row_pooler {
   std::vector<const T*> src_;
   std::vector<const T*> src_x_;
   Eigen::Array<T, Eigen::Dynamic, 1> vertical_;  ///< one row, zero margins
+};
+
+/// Pools the NumBins x NumBins bins of single patches straight from the orientation channels
+/// (layout of `orientation_channels`, `margin` >= every tap's |offset|): what `row_pooler` gives
+/// at the patch's bin positions, without pooling whole rows. Same arithmetic in the same order
+/// (vertical sums over the taps first, then the horizontal sum of those), so the result is
+/// `row_pooler`'s to the last bit up to the compiler's contraction choices.
+///
+/// Per bin row, the vertical sums are taken once over the columns that any bin of that row reads
+/// ((NumBins - 1) * bin + the kernel's span); each bin then sums its taps out of that scratch
+/// row. For sift_lite (17 taps) that is 2 x 26 x 17 + 4 x 17 vector FMAs per patch.
+template <int NumBins, int NumAngles, class T>
+class patch_pooler {
+ public:
+  patch_pooler(const std::vector<pooling_tap<T>>& taps, const T* channels, Eigen::Index w,
+               Eigen::Index margin, Eigen::Index bin)
+      : channels_(channels),
+        row_size_((w + 2 * margin) * NumAngles),
+        margin_(margin),
+        bin_(bin),
+        weight_(taps.size()),
+        offset_(taps.size()),
+        src_(taps.size()) {
+    for (std::size_t t = 0; t < taps.size(); ++t) {
+      weight_[t] = taps[t].weight;
+      offset_[t] = taps[t].offset;
+    }
+    const auto [lo, hi] = std::minmax_element(offset_.begin(), offset_.end());
+    first_ = taps.empty() ? 0 : *lo;
+    span_ = taps.empty() ? 0 : (NumBins - 1) * bin + *hi - first_ + 1;
+    vertical_.resize(static_cast<std::size_t>(span_ * NumAngles));
+  }
+
+  /// Writes the NumBins^2 * NumAngles pooled values of the patch with top-left (r, c) to `out`,
+  /// element k + NumAngles * (by + NumBins * bx) (dense_sift's element order).
+  void operator()(Eigen::Index r, Eigen::Index c, T* out) {
+    using angles = Eigen::Array<T, NumAngles, 1>;
+    const std::size_t taps = weight_.size();
+    const Eigen::Index x0 = c + first_ + margin_;  // first column the bins read, in the layout
+    for (Eigen::Index by = 0; by < NumBins; ++by) {
+      const Eigen::Index y = r + by * bin_ + margin_;
+      for (std::size_t t = 0; t < taps; ++t) {
+        src_[t] = channels_ + (y + offset_[t]) * row_size_ + x0 * NumAngles;
+      }
+      weighted_sum(src_.data(), weight_.data(), taps, vertical_.data(), span_ * NumAngles);
+      // Each bin: one orientation vector, its taps accumulated in registers (weighted_sum's
+      // arithmetic for a row of NumAngles values).
+      for (Eigen::Index bx = 0; bx < NumBins; ++bx) {
+        const T* v = vertical_.data() + (bx * bin_ - first_) * NumAngles;
+        angles acc = angles::Zero();
+        for (std::size_t t = 0; t < taps; ++t) {
+          acc += weight_[t] * Eigen::Map<const angles>(v + offset_[t] * NumAngles);
+        }
+        Eigen::Map<angles>(out + NumAngles * (by + NumBins * bx)) = acc;
+      }
+    }
+  }
+
+ private:
+  const T* channels_;
+  Eigen::Index row_size_;
+  Eigen::Index margin_;
+  Eigen::Index bin_;
+  Eigen::Index first_ = 0;  ///< smallest tap offset
+  Eigen::Index span_ = 0;   ///< columns one bin row's vertical sums cover
+  std::vector<T> weight_;
+  std::vector<Eigen::Index> offset_;
+  std::vector<const T*> src_;
+  std::vector<T> vertical_;
 };
 
 /// Lazebnik's normalisation "that respects flat areas", for `count` consecutive descriptors of
