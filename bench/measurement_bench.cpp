@@ -11,25 +11,14 @@
 #include <random>
 
 #include "tacmap/descriptor/dense_sift.hpp"
+#include "bench_maps.hpp"
 #include "tacmap/tacmap.hpp"
 
 namespace {
 
 using grid_t = tacmap::planar_grid<float>;
 
-tacmap::image<float> bench_map() {
-  std::mt19937 rng(9);
-  tacmap::image<float> map = tacmap::image<float>::Zero(120, 120);
-  for (int bar = 0; bar < 20; ++bar)
-    map.block(static_cast<Eigen::Index>(rng() % 100), static_cast<Eigen::Index>(rng() % 100),
-              static_cast<Eigen::Index>(3 + rng() % 17),
-              static_cast<Eigen::Index>(3 + rng() % 17)) += 1.0F;
-  for (Eigen::Index r = 0; r < 120; ++r)
-    for (Eigen::Index c = 0; c < 120; ++c)
-      map(r, c) += 0.2F * std::sin(0.2F * static_cast<float>(r + 2 * c));
-  map -= map.minCoeff();
-  return map / map.maxCoeff();
-}
+using tacmap_bench::bench_map;
 
 // One touch (a window cut from the map) through `model`, timed over the whole grid.
 template <class Model>

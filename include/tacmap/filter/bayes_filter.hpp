@@ -8,9 +8,12 @@
 // knowledge of where the sensor is (Sec. III-A); `set_prior` takes a user prior instead.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <tuple>
+#include <type_traits>
 #include <utility>
 
 #include "tacmap/filter/detail/posterior_kernel.hpp"
@@ -40,6 +43,15 @@ struct update_report {
   /// maximum: 0 when the prediction put all its mass on the best-matching states, very negative
   /// when the measurement contradicts the prediction (a hint of a bad touch or bad odometry).
   double log_evidence = 0.0;
+};
+
+/// Grids that flag some coordinates as angles: `static constexpr std::array<bool, dimension>
+/// circular` (pose_grid: theta). `estimate()` then uses circular statistics for them.
+template <class G>
+concept has_circular_coordinates = requires {
+  { G::circular[0] } -> std::convertible_to<bool>;
+  requires std::tuple_size_v<std::remove_cvref_t<decltype(G::circular)>>
+  == G::dimension;
 };
 
 /// The recursive Bayes filter over `Grid`, with the `Motion` and `Measurement` policies.
@@ -180,16 +192,20 @@ class bayes_filter {
     e.map_mm = grid_.state_mm(best);
     // Moments of the cached coordinates relative to the grid's first state: small numbers, so
     // E[o o^T] - E[o] E[o]^T does not cancel catastrophically even on a far-from-origin map.
-    typename estimate_type::vector_type mean_offset = estimate_type::vector_type::Zero();
-    typename estimate_type::matrix_type second = estimate_type::matrix_type::Zero();
-    for (Eigen::Index i = 0; i < grid_.size(); ++i) {
-      const double p = static_cast<double>(belief_(i));
-      const auto o = offsets_mm_.col(i);
-      mean_offset += p * o;
-      second.noalias() += (p * o) * o.transpose();
+    if constexpr (has_circular_coordinates<Grid>) {
+      circular_moments(e);
+    } else {
+      typename estimate_type::vector_type mean_offset = estimate_type::vector_type::Zero();
+      typename estimate_type::matrix_type second = estimate_type::matrix_type::Zero();
+      for (Eigen::Index i = 0; i < grid_.size(); ++i) {
+        const double p = static_cast<double>(belief_(i));
+        const auto o = offsets_mm_.col(i);
+        mean_offset += p * o;
+        second.noalias() += (p * o) * o.transpose();
+      }
+      e.covariance_mm2 = second - mean_offset * mean_offset.transpose();
+      e.mean_mm = origin_mm_ + mean_offset;
     }
-    e.covariance_mm2 = second - mean_offset * mean_offset.transpose();
-    e.mean_mm = origin_mm_ + mean_offset;
     // 0 log 0 = 0: the tiny offset keeps log finite where p = 0 without changing other terms.
     const scalar_type tiny = std::numeric_limits<scalar_type>::min();
     e.entropy_nats = -static_cast<double>((belief_ * (belief_ + tiny).log()).sum());
@@ -203,6 +219,58 @@ class bayes_filter {
   [[nodiscard]] Measurement& measurement_model() { return measurement_; }
 
  private:
+  // Mean and covariance when some coordinates are angles (Grid::circular[k]): the mean angle is
+  // the circular mean atan2(E[sin], E[cos]) in [-pi, pi), and deviations from it are wrapped
+  // into [-pi, pi) before the (co)variances are taken — a belief split between -179 and +179
+  // degrees has mean 180 degrees and a small spread, not mean 0 and a huge one. Two passes: the
+  // mean first, then the wrapped deviations.
+  void circular_moments(estimate_type& e) const requires has_circular_coordinates<Grid> {
+    constexpr int dim = Grid::dimension;
+    typename estimate_type::vector_type mean_offset = estimate_type::vector_type::Zero();
+    std::array<double, static_cast<std::size_t>(dim)> sum_cos{};
+    std::array<double, static_cast<std::size_t>(dim)> sum_sin{};
+    for (Eigen::Index i = 0; i < grid_.size(); ++i) {
+      const double p = static_cast<double>(belief_(i));
+      if (p == 0.0) continue;
+      const auto o = offsets_mm_.col(i);
+      for (int k = 0; k < dim; ++k) {
+        if (Grid::circular[static_cast<std::size_t>(k)]) {
+          const double angle = origin_mm_(k) + o(k);
+          sum_cos[static_cast<std::size_t>(k)] += p * std::cos(angle);
+          sum_sin[static_cast<std::size_t>(k)] += p * std::sin(angle);
+        } else {
+          mean_offset(k) += p * o(k);
+        }
+      }
+    }
+    typename estimate_type::vector_type mean = origin_mm_ + mean_offset;
+    for (int k = 0; k < dim; ++k)
+      if (Grid::circular[static_cast<std::size_t>(k)])
+        mean(k) = wrap_pi(
+            std::atan2(sum_sin[static_cast<std::size_t>(k)], sum_cos[static_cast<std::size_t>(k)]));
+    e.mean_mm = mean;
+    typename estimate_type::matrix_type cov = estimate_type::matrix_type::Zero();
+    typename estimate_type::vector_type d;
+    for (Eigen::Index i = 0; i < grid_.size(); ++i) {
+      const double p = static_cast<double>(belief_(i));
+      if (p == 0.0) continue;
+      const auto o = offsets_mm_.col(i);
+      for (int k = 0; k < dim; ++k)
+        d(k) = Grid::circular[static_cast<std::size_t>(k)] ? wrap_pi(origin_mm_(k) + o(k) - mean(k))
+                                                           : o(k) - mean_offset(k);
+      cov.noalias() += (p * d) * d.transpose();
+    }
+    e.covariance_mm2 = cov;
+  }
+
+  static double wrap_pi(double a) {
+    constexpr double pi = 3.14159265358979323846;
+    double w = std::fmod(a + pi, 2.0 * pi);
+    if (w < 0.0) w += 2.0 * pi;
+    w -= pi;
+    return w >= pi ? -pi : w;
+  }
+
   // bel = eta * exp(ll - max ll) * bel_bar. Subtracting the maximum first means the best state's
   // factor is exactly 1, so no likelihood underflows to an all-zero posterior by itself.
   update_report apply_log_likelihood(const belief_type& ll, const char* source) {

@@ -182,32 +182,53 @@ class odometry_gaussian {
     TACMAP_ASSERT(in.size() == grid.size() && out.size() == grid.size(),
                   "belief buffers must match the grid");
 
-    // Shift in pixels, split into integer part and fraction for the bilinear kernel.
-    const double sx = u.dx_mm / grid.mm_per_px();
-    const double sy = u.dy_mm / grid.mm_per_px();
+    TACMAP_ASSERT(grid.size() == grid.rows() * grid.cols(),
+                  "odometry_gaussian moves single-layer (x, y) grids");
+    const Eigen::Map<const image<T>> in_img(in.data(), grid.rows(), grid.cols());
+    Eigen::Map<image<T>> out_img(out.data(), grid.rows(), grid.cols());
+    transport(in_img, out_img, u.dx_mm / grid.mm_per_px(), u.dy_mm / grid.mm_per_px(),
+              grid.mm_to_px(params_.sigma_mm));
+
+    const double kept = static_cast<double>(out.sum());
+    const double before = static_cast<double>(in.sum());
+    if (!(kept > 0.0) || !std::isfinite(kept))
+      detail::fail<std::domain_error>(
+          "odometry_gaussian: odometry (", u.dx_mm, ", ", u.dy_mm, ") mm moves all belief mass ",
+          "off the grid; expected a displacement that keeps the sensor over the map — check the "
+          "units (millimetres) and the map-frame calibration, or use off_grid::clamp");
+    out *= static_cast<T>(1.0 / kept);
+    return {std::clamp(1.0 - kept / before, 0.0, 1.0)};
+  }
+
+  /// The un-normalised core of `predict` for one belief image: out = in shifted by
+  /// (shift_x_px, shift_y_px) (bilinear for the fraction) and spread by the Gaussian stencil of
+  /// `sigma_px`; mass leaving the image is dropped or clamped per `params().boundary`, never
+  /// renormalised. `what` only names the control in error messages. Used per layer by
+  /// multi-layer motion models (`pose_odometry_gaussian`).
+  template <class T>
+  void transport(const Eigen::Map<const image<T>>& in_img, Eigen::Map<image<T>>& out_img,
+                 double shift_x_px, double shift_y_px, double sigma_px) const {
+    const double sx = shift_x_px;
+    const double sy = shift_y_px;
     const double fx_floor = std::floor(sx);
     const double fy_floor = std::floor(sy);
-    const double limit = static_cast<double>(grid.rows() + grid.cols()) + 4.0 * radius_;
+    const double limit = static_cast<double>(in_img.rows() + in_img.cols()) + 4.0 * radius_;
     if (std::abs(fx_floor) > limit || std::abs(fy_floor) > limit) {
       if (params_.boundary == off_grid::renormalize)
         detail::fail<std::domain_error>(
-            "odometry_gaussian: odometry (", u.dx_mm, ", ", u.dy_mm, ") mm moves the sensor ",
-            "farther than the whole map (", grid.px_to_mm(static_cast<double>(grid.cols())), " x ",
-            grid.px_to_mm(static_cast<double>(grid.rows())),
-            " mm of states); expected a displacement since the previous touch, in millimetres");
+            "odometry_gaussian: a shift of (", shift_x_px, ", ", shift_y_px,
+            ") px moves the sensor farther than the whole grid (", in_img.cols(), " x ",
+            in_img.rows(),
+            " states); expected a displacement since the previous touch, in millimetres");
     }
     const auto ix = static_cast<Eigen::Index>(std::clamp(fx_floor, -limit, limit));
     const auto iy = static_cast<Eigen::Index>(std::clamp(fy_floor, -limit, limit));
     const double fx = std::clamp(sx - fx_floor, 0.0, 1.0);
     const double fy = std::clamp(sy - fy_floor, 0.0, 1.0);
 
-    const double inv_two_var = 0.5 / std::pow(grid.mm_to_px(params_.sigma_mm), 2);
+    const double inv_two_var = 0.5 / (sigma_px * sigma_px);
     const bool clamp = params_.boundary == off_grid::clamp;
-    TACMAP_ASSERT(grid.size() == grid.rows() * grid.cols(),
-                  "odometry_gaussian moves single-layer (x, y) grids");
-    const Eigen::Map<const image<T>> in_img(in.data(), grid.rows(), grid.cols());
-    Eigen::Map<image<T>> out_img(out.data(), grid.rows(), grid.cols());
-
+    const Eigen::Index n = in_img.size();
     if (separable_) {
       // Square stencils (k = 8: 3 x 3, k = 24: 5 x 5): the Gaussian and the bilinear kernel both
       // factor into x and y, so two 1-D passes of 2R + 2 taps replace (2R + 2)^2 2-D taps.
@@ -225,18 +246,18 @@ class odometry_gaussian {
       };
       const auto wx = taps(fx);
       const auto wy = taps(fy);
-      belief_array<G>& tmp = workspace<T>();
-      tmp.resize(grid.size());
-      Eigen::Map<image<T>> tmp_img(tmp.data(), grid.rows(), grid.cols());
+      Eigen::Array<T, Eigen::Dynamic, 1>& tmp = workspace<T>();
+      tmp.resize(n);
+      Eigen::Map<image<T>> tmp_img(tmp.data(), in_img.rows(), in_img.cols());
       tmp.setZero();
-      const Eigen::Map<const image<T>> tmp_in(tmp.data(), grid.rows(), grid.cols());
+      const Eigen::Map<const image<T>> tmp_in(tmp.data(), in_img.rows(), in_img.cols());
       for (int t = 0; t < 2 * radius_ + 2; ++t) {
         const double w = wx[static_cast<std::size_t>(t)];
         if (w > 0.0)
           detail::shifted_accumulate(in_img, tmp_img, 0, ix + t - radius_, static_cast<T>(w),
                                      clamp);
       }
-      out.setZero();
+      out_img.setZero();
       for (int t = 0; t < 2 * radius_ + 2; ++t) {
         const double w = wy[static_cast<std::size_t>(t)];
         if (w > 0.0)
@@ -261,7 +282,7 @@ class odometry_gaussian {
               g * bilinear[static_cast<std::size_t>(b)];
         }
       }
-      out.setZero();
+      out_img.setZero();
       for (int cy = 0; cy < side; ++cy)
         for (int cx = 0; cx < side; ++cx) {
           const double w = composite[static_cast<std::size_t>(cy * side + cx)];
@@ -272,15 +293,6 @@ class odometry_gaussian {
         }
     }
 
-    const double kept = static_cast<double>(out.sum());
-    const double before = static_cast<double>(in.sum());
-    if (!(kept > 0.0) || !std::isfinite(kept))
-      detail::fail<std::domain_error>(
-          "odometry_gaussian: odometry (", u.dx_mm, ", ", u.dy_mm, ") mm moves all belief mass ",
-          "off the grid; expected a displacement that keeps the sensor over the map — check the "
-          "units (millimetres) and the map-frame calibration, or use off_grid::clamp");
-    out *= static_cast<T>(1.0 / kept);
-    return {std::clamp(1.0 - kept / before, 0.0, 1.0)};
   }
 
  private:

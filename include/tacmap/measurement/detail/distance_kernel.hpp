@@ -176,4 +176,98 @@ void accumulate_distances(const descriptor_tiles<T>& f,
   }
 }
 
+/// Plain reference of `distances_each`.
+template <class T>
+void distances_each_scalar(const descriptor_tiles<T>& f,
+                           const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, T* out,
+                           Eigen::Index out_stride) {
+  for (Eigen::Index j = 0; j < g.cols(); ++j)
+    for (Eigen::Index q = 0; q < f.positions(); ++q) {
+      T sum = 0;
+      for (Eigen::Index k = 0; k < f.dimension(); ++k) {
+        const T d = f.at(q, k) - g(k, j);
+        sum += d * d;
+      }
+      out[j * out_stride + q] = std::sqrt(sum);
+    }
+}
+
+namespace distance_kernel {
+
+// Tiles x Count accumulators as in `block`, but each descriptor's distances go to their own
+// output column (stored, not summed).
+template <std::size_t Tiles, std::size_t Count, class T>
+void block_each(const descriptor_tiles<T>& f, Eigen::Index t0, const T* g, Eigen::Index g_stride,
+                T* out, Eigen::Index out_stride) {
+  using batch = xsimd::batch<T>;
+  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+  const Eigen::Index dim = f.dimension();
+  batch acc[Tiles][Count];
+  for (std::size_t i = 0; i < Tiles; ++i)
+    for (std::size_t j = 0; j < Count; ++j) acc[i][j] = batch(T(0));
+  const T* tile = f.tile(t0);
+  const Eigen::Index tile_stride = dim * width;
+  for (Eigen::Index k = 0; k < dim; ++k) {
+    batch gk[Count];
+    for (std::size_t j = 0; j < Count; ++j)
+      gk[j] = batch(g[static_cast<Eigen::Index>(j) * g_stride + k]);
+    for (std::size_t i = 0; i < Tiles; ++i) {
+      const batch v =
+          batch::load_aligned(tile + static_cast<Eigen::Index>(i) * tile_stride + k * width);
+      for (std::size_t j = 0; j < Count; ++j) {
+        const batch d = v - gk[j];
+        acc[i][j] = xsimd::fma(d, d, acc[i][j]);
+      }
+    }
+  }
+  for (std::size_t i = 0; i < Tiles; ++i) {
+    const Eigen::Index first = (t0 + static_cast<Eigen::Index>(i)) * width;
+    for (std::size_t j = 0; j < Count; ++j) {
+      T* o = out + static_cast<Eigen::Index>(j) * out_stride + first;
+      const batch d = xsimd::sqrt(acc[i][j]);
+      if (first + width <= f.positions()) {
+        d.store_unaligned(o);
+      } else {
+        alignas(64) T lanes[static_cast<std::size_t>(width)];
+        d.store_aligned(lanes);
+        const Eigen::Index real = std::min(width, f.positions() - first);
+        for (Eigen::Index l = 0; l < real; ++l) o[l] = lanes[l];
+      }
+    }
+  }
+}
+
+template <std::size_t Tiles, class T>
+void each_descriptor(const descriptor_tiles<T>& f, Eigen::Index t0,
+                     const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, T* out,
+                     Eigen::Index out_stride) {
+  const Eigen::Index stride = g.rows();
+  const Eigen::Index count = g.cols();
+  const T* gj = g.data();
+  T* oj = out;
+  Eigen::Index left = count;
+  for (; left >= 3; left -= 3, gj += 3 * stride, oj += 3 * out_stride)
+    block_each<Tiles, 3>(f, t0, gj, stride, oj, out_stride);
+  for (; left > 0; --left, gj += stride, oj += out_stride)
+    block_each<Tiles, 1>(f, t0, gj, stride, oj, out_stride);
+}
+
+}  // namespace distance_kernel
+
+/// out[j * out_stride + q] = || F(q) - g.col(j) || for every descriptor j and position q: many
+/// tactile descriptors (e.g. 3 patches x 36 headings) against the map's field in ONE pass over
+/// the field — each block of tiles stays in L1 while every descriptor visits it, so the field
+/// (1.4 MB for a 120 px map) is read from memory once, not once per descriptor. Requires
+/// out_stride >= f.positions().
+template <class T>
+void distances_each(const descriptor_tiles<T>& f,
+                    const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, T* out,
+                    Eigen::Index out_stride) {
+  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+  const Eigen::Index count = (f.positions() + width - 1) / width;
+  Eigen::Index t = 0;
+  for (; t + 3 <= count; t += 3) distance_kernel::each_descriptor<3>(f, t, g, out, out_stride);
+  for (; t < count; ++t) distance_kernel::each_descriptor<1>(f, t, g, out, out_stride);
+}
+
 }  // namespace tacmap::detail

@@ -1,0 +1,28 @@
+// A reproducible textured map for the benchmarks: random bars (edges in both directions) over a
+// slanted sine, normalised to [0, 1]. Shared by every bench that needs a map.
+#pragma once
+
+#include <cmath>
+#include <random>
+
+#include "tacmap/image.hpp"
+
+namespace tacmap_bench {
+
+inline tacmap::image<float> bench_map(Eigen::Index rows = 120, Eigen::Index cols = 120) {
+  std::mt19937 rng(9);
+  tacmap::image<float> map = tacmap::image<float>::Zero(rows, cols);
+  const auto bars = static_cast<int>(20 * (rows * cols) / (120 * 120));
+  for (int bar = 0; bar < bars; ++bar)
+    map.block(static_cast<Eigen::Index>(rng() % static_cast<unsigned>(rows - 20)),
+              static_cast<Eigen::Index>(rng() % static_cast<unsigned>(cols - 20)),
+              static_cast<Eigen::Index>(3 + rng() % 17), static_cast<Eigen::Index>(3 + rng() % 17)) +=
+        1.0F;
+  for (Eigen::Index r = 0; r < rows; ++r)
+    for (Eigen::Index c = 0; c < cols; ++c)
+      map(r, c) += 0.2F * std::sin(0.2F * static_cast<float>(r + 2 * c));
+  map -= map.minCoeff();
+  return map / map.maxCoeff();
+}
+
+}  // namespace tacmap_bench

@@ -1,0 +1,390 @@
+// tacmap: `rotated_descriptor_likelihood` — the paper's feature measurement model (Sec. III-C)
+// over (x, y, theta) pose grids.
+//
+// The map is described ONCE, densely at stride 1 (the descriptor field F, as `shared_dense`
+// features); it is never recomputed per heading. What turns is the tactile image: for heading
+// theta_a the sensor's image is rotated into the map frame (a square canvas around the sensor
+// centre, bilinear, sampling tables built once per heading), and the tactile patch m, whose
+// centre c_m sits in the window as in the planar model, lands at R(theta_a) c_m. The canvas is
+// described there (an axis-aligned patch, like every map patch), giving g_{a,m}; window x's
+// patch m at heading a is the map's dense patch at x + round(R(theta_a) c_m). Then eq. (1)
+// and the likelihood shape exactly as in `descriptor_likelihood`:
+//   all_pairs:  d(x, a, z) = sum_m sum_n || F(x + o_{a,m}) - g_{a,n} ||
+//   aligned:    d(x, a, z) = sum_m       || F(x + o_{a,m}) - g_{a,m} ||
+// All M x A tactile descriptors meet the field in one pass (detail::distances_each), then each
+// heading's layer is M shifted whole-image block additions.
+//
+// Conventions: pose_grid.hpp (headings, layer order). Outside the tactile image the canvas
+// repeats its edge pixels (so an edge of the footprint is not mistaken for an edge in the
+// object). A pose whose rotated patches leave the map (possible near the map's edge: positions
+// are those where the *unrotated* window fits) gets log-likelihood -infinity: the sensor cannot
+// be pressed there.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <array>
+#include <concepts>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "tacmap/grid/pose_grid.hpp"
+#include "tacmap/measurement/descriptor_likelihood.hpp"
+
+namespace tacmap {
+
+/// Configuration of `rotated_descriptor_likelihood`: the planar model's knobs (same meaning,
+/// same defaults) without `features` — the map's features are always its dense field.
+struct rotated_likelihood_params {
+  Eigen::Index spacing = descriptor_likelihood_params{}.spacing;  ///< px between patches
+  pairing pairs = descriptor_likelihood_params{}.pairs;
+  likelihood_shape shape = descriptor_likelihood_params{}.shape;
+  double epsilon = descriptor_likelihood_params{}.epsilon;
+  double tau = descriptor_likelihood_params{}.tau;
+  double tempering = descriptor_likelihood_params{}.tempering;
+
+  void validate() const {
+    descriptor_likelihood_params p;
+    p.spacing = spacing;
+    p.epsilon = epsilon;
+    p.tau = tau;
+    p.tempering = tempering;
+    p.validate();
+  }
+};
+
+/// Descriptors that can describe a few arbitrary patches of an image without computing the
+/// whole dense field (dense_sift::describe_at). Optional: others go through compute().
+template <class D>
+concept describes_at =
+    descriptor<D> && requires(const D& d, const image<typename D::scalar_type>& img,
+                              std::span<const grid_cell> cells) {
+  { d.describe_at(img, cells) } -> std::convertible_to<
+      Eigen::Array<typename D::scalar_type, Eigen::Dynamic, Eigen::Dynamic>>;
+};
+
+/// The feature measurement model over a `pose_grid` (x, y, theta), for any `descriptor`.
+template <descriptor Descriptor>
+class rotated_descriptor_likelihood {
+ public:
+  using scalar_type = typename Descriptor::scalar_type;
+  using measurement_type = image<float>;  ///< preprocessed tactile image at map scale
+
+  /// Describes `map` once. `window`: the tactile image's size in map pixels; `angle_count`:
+  /// the pose grid's headings. Throws std::invalid_argument when the map is smaller than the
+  /// window, the patch and spacing do not fit the window, the map holds NaN, or angle_count < 1.
+  rotated_descriptor_likelihood(Descriptor descriptor, const image<float>& map, pixel_size window,
+                                int angle_count, rotated_likelihood_params params = {})
+      : descriptor_(std::move(descriptor)), params_(params), window_(window), angles_(angle_count) {
+    params.validate();
+    const Eigen::Index p = descriptor_.patch_size();
+    if (angle_count < 1)
+      detail::fail("rotated_descriptor_likelihood: angle_count = ", angle_count,
+                   "; expected >= 1 (the pose grid's number of headings)");
+    if (window.width <= 0 || window.height <= 0 || map.cols() < window.width ||
+        map.rows() < window.height)
+      detail::fail("rotated_descriptor_likelihood: the map is ", map.cols(), " x ", map.rows(),
+                   " px (width x height) and the window ", window.width, " x ", window.height,
+                   "; expected a positive window no larger than the map");
+    if (window.width < p || window.height < p)
+      detail::fail("rotated_descriptor_likelihood: a descriptor patch of ", p,
+                   " px does not fit the ", window.width, " x ", window.height,
+                   " px tactile window; expected a patch no larger than the window's shorter "
+                   "side (paper: patch 18 on a 42 x 18 window)");
+    if (!detail::all_finite(map))
+      detail::fail("rotated_descriptor_likelihood: the map contains NaN or infinite pixels");
+    std::vector<grid_cell> offsets;
+    for (Eigen::Index oy = 0; oy + p <= window.height; oy += params.spacing)
+      for (Eigen::Index ox = 0; ox + p <= window.width; ox += params.spacing)
+        offsets.push_back({oy, ox});
+    m_count_ = static_cast<Eigen::Index>(offsets.size());
+
+    const image<scalar_type> map_t = map.template cast<scalar_type>();
+    const descriptor_field<scalar_type> field = descriptor_.compute(map_t);
+    field_rows_ = field.rows;
+    field_cols_ = field.cols;
+    field_tiles_ = detail::descriptor_tiles<scalar_type>(field.values);
+    rows_ = map.rows() - window.height + 1;
+    cols_ = map.cols() - window.width + 1;
+    build_headings(offsets);
+  }
+
+  /// The same, with the window and headings taken from `grid`.
+  template <class T>
+  rotated_descriptor_likelihood(Descriptor descriptor, const image<float>& map,
+                                const pose_grid<T>& grid, rotated_likelihood_params params = {})
+      : rotated_descriptor_likelihood(std::move(descriptor), map, grid.window_size(),
+                                      grid.angle_count(), params) {}
+
+  [[nodiscard]] int angle_count() const { return angles_; }
+  /// Number of tactile patches M per window (the paper: 3).
+  [[nodiscard]] Eigen::Index patches_per_window() const { return m_count_; }
+  [[nodiscard]] const rotated_likelihood_params& params() const { return params_; }
+  [[nodiscard]] const Descriptor& descriptor() const { return descriptor_; }
+  /// Side lengths of the square-ish canvas a tactile image is rotated into (rows x cols).
+  [[nodiscard]] pixel_size canvas_size() const { return {canvas_cols_, canvas_rows_}; }
+  /// Map-field offset (rows, cols) of patch m at heading `layer`, relative to the window's
+  /// top-left cell: the state's patch is the dense map patch at cell + offset.
+  [[nodiscard]] grid_cell patch_offset(Eigen::Index layer, Eigen::Index m) const {
+    return heading_[static_cast<std::size_t>(layer)].field_offset[static_cast<std::size_t>(m)];
+  }
+
+  /// The tactile image rotated into the map frame for heading `layer` (canvas_size()).
+  [[nodiscard]] image<scalar_type> rotated_tactile(const measurement_type& z,
+                                                   Eigen::Index layer) const {
+    check_measurement(z);
+    TACMAP_ASSERT(layer >= 0 && layer < angles_, "heading layer out of range");
+    image<scalar_type> canvas(canvas_rows_, canvas_cols_);
+    render(z.template cast<scalar_type>(), heading_[static_cast<std::size_t>(layer)], canvas);
+    return canvas;
+  }
+
+  /// All tactile descriptors: dimension x (M * angle_count), column a * M + m is patch m at
+  /// heading a.
+  [[nodiscard]] Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> tactile_descriptors(
+      const measurement_type& z) const {
+    check_measurement(z);
+    const image<scalar_type> zt = z.template cast<scalar_type>();
+    Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g(descriptor_.dimension(),
+                                                                m_count_ * angles_);
+    image<scalar_type> canvas(canvas_rows_, canvas_cols_);
+    for (Eigen::Index a = 0; a < angles_; ++a) {
+      const heading_tables& h = heading_[static_cast<std::size_t>(a)];
+      render(zt, h, canvas);
+      if constexpr (describes_at<Descriptor>) {
+        g.middleCols(a * m_count_, m_count_) = descriptor_.describe_at(
+            canvas, std::span<const grid_cell>(h.canvas_top_left.data(), h.canvas_top_left.size()));
+      } else {
+        const auto f = descriptor_.compute(canvas);
+        for (Eigen::Index m = 0; m < m_count_; ++m) {
+          const grid_cell c = h.canvas_top_left[static_cast<std::size_t>(m)];
+          g.col(a * m_count_ + m) = f.at(c.row, c.col);
+        }
+      }
+    }
+    return g;
+  }
+
+  /// The distance d(x, a, z) for every pose (layer after layer); +infinity where a pose's
+  /// rotated patches leave the map.
+  template <class G>
+  void distances(const G& grid, const measurement_type& z, belief_array<G>& out) const
+      requires std::same_as<typename G::scalar_type, scalar_type> {
+    check_grid(grid);
+    const auto g = tactile_descriptors(z);
+    const Eigen::Index positions = field_rows_ * field_cols_;
+    auto& dist = workspace_;
+    dist.resize(positions, g.cols());
+    if constexpr (euclidean_descriptor<Descriptor>) {
+      detail::distances_each(field_tiles_, g, dist.data(), positions);
+    } else {  // a user's distance, called once per pair
+      Eigen::Array<scalar_type, Eigen::Dynamic, 1> column(field_tiles_.dimension());
+      for (Eigen::Index q = 0; q < positions; ++q) {
+        for (Eigen::Index k = 0; k < field_tiles_.dimension(); ++k)
+          column(k) = field_tiles_.at(q, k);
+        for (Eigen::Index j = 0; j < g.cols(); ++j)
+          dist(q, j) = descriptor_.distance(column, g.col(j));
+      }
+    }
+    const Eigen::Index plane = rows_ * cols_;
+    constexpr scalar_type inf = std::numeric_limits<scalar_type>::infinity();
+    for (Eigen::Index a = 0; a < angles_; ++a) {
+      const heading_tables& h = heading_[static_cast<std::size_t>(a)];
+      if (params_.pairs == pairing::all_pairs) {
+        // sum_m sum_n D_n(x + o_m) = sum_m S(x + o_m) with S = sum_n D_n (kept in column 0).
+        for (Eigen::Index n = 1; n < m_count_; ++n)
+          dist.col(a * m_count_) += dist.col(a * m_count_ + n);
+      }
+      Eigen::Map<image<scalar_type>> layer(out.data() + a * plane, rows_, cols_);
+      if (h.valid_rows <= 0 || h.valid_cols <= 0) {
+        layer.setConstant(inf);
+        continue;
+      }
+      // Outside the rectangle where every patch lands on the map: +inf (ruled out).
+      if (h.valid_rows < rows_ || h.valid_cols < cols_) layer.setConstant(inf);
+      auto block = layer.block(h.first_row, h.first_col, h.valid_rows, h.valid_cols);
+      for (Eigen::Index m = 0; m < m_count_; ++m) {
+        const Eigen::Index n = params_.pairs == pairing::all_pairs ? 0 : m;
+        const Eigen::Map<const image<scalar_type>> dn(&dist(0, a * m_count_ + n), field_rows_,
+                                                      field_cols_);
+        const grid_cell o = h.field_offset[static_cast<std::size_t>(m)];
+        const auto src =
+            dn.block(h.first_row + o.row, h.first_col + o.col, h.valid_rows, h.valid_cols);
+        if (m == 0)
+          block = src;
+        else
+          block += src;
+      }
+    }
+  }
+
+  /// log p(z | x, theta) for every pose: eq. (1), then eq. (2) or the exponential, tempered;
+  /// -infinity for poses whose footprint leaves the map.
+  template <class G>
+  void log_likelihood(const G& grid, const measurement_type& z, belief_array<G>& out) const
+      requires std::same_as<typename G::scalar_type, scalar_type> {
+    distances(grid, z, out);
+    const auto temper = static_cast<scalar_type>(params_.tempering);
+    constexpr scalar_type inf = std::numeric_limits<scalar_type>::infinity();
+    if (!(temper > scalar_type(0))) {  // flat likelihood; ruled-out poses stay ruled out
+      for (auto& v : out) v = v < inf ? scalar_type(0) : -inf;
+      return;
+    }
+    if (params_.shape == likelihood_shape::inverse)
+      out = -temper * (out + static_cast<scalar_type>(params_.epsilon)).log();
+    else
+      out *= -temper / static_cast<scalar_type>(params_.tau);
+  }
+
+ private:
+  // Per heading: where each patch lands on the map and on the canvas, the rectangle of states
+  // whose patches all land on the map, and the canvas's bilinear sampling table.
+  struct heading_tables {
+    std::vector<grid_cell> field_offset;     // per patch, relative to the state's cell
+    std::vector<grid_cell> canvas_top_left;  // per patch, on the canvas
+    Eigen::Index first_row = 0, first_col = 0, valid_rows = 0, valid_cols = 0;
+    std::vector<std::int32_t> source;  // canvas px -> top-left tactile px of its 2 x 2 sample
+    std::vector<std::array<float, 4>> weight;  // bilinear weights (tl, tr, bl, br)
+    std::vector<std::int32_t> step_x;          // 0 or 1: right neighbour exists
+    std::vector<std::int32_t> step_y;          // 0 or W: lower neighbour exists
+  };
+
+  void build_headings(const std::vector<grid_cell>& offsets) {
+    const double p = static_cast<double>(descriptor_.patch_size());
+    const double w = static_cast<double>(window_.width);
+    const double h = static_cast<double>(window_.height);
+    // Patch centres relative to the window centre (x right, y down), px.
+    std::vector<std::array<double, 2>> centre;
+    double reach = 0.0;
+    for (const grid_cell& o : offsets) {
+      const double cx = static_cast<double>(o.col) + 0.5 * p - 0.5 * w;
+      const double cy = static_cast<double>(o.row) + 0.5 * p - 0.5 * h;
+      centre.push_back({cx, cy});
+      reach = std::max(reach, std::hypot(cx, cy));
+    }
+    // The canvas holds the whole rotated footprint and every rotated patch (rounded) with a
+    // pixel to spare; same parity as the window so that the sensor centre has the same
+    // sub-pixel phase on the canvas as on the map (then the rounding below agrees on both).
+    const auto side = static_cast<Eigen::Index>(
+        std::ceil(std::max(std::hypot(w, h), 2.0 * reach + p + 2.0)));
+    canvas_rows_ = side + ((side - window_.height) % 2 != 0 ? 1 : 0);
+    canvas_cols_ = side + ((side - window_.width) % 2 != 0 ? 1 : 0);
+    const Eigen::Index pad_rows = (canvas_rows_ - window_.height) / 2;
+    const Eigen::Index pad_cols = (canvas_cols_ - window_.width) / 2;
+    const Eigen::Index pi = descriptor_.patch_size();
+
+    heading_.resize(static_cast<std::size_t>(angles_));
+    for (Eigen::Index a = 0; a < angles_; ++a) {
+      heading_tables& t = heading_[static_cast<std::size_t>(a)];
+      const double theta = detail::layer_heading(a, angles_);
+      const double cs = std::cos(theta);
+      const double sn = std::sin(theta);
+      Eigen::Index lo_r = 0, lo_c = 0, hi_r = rows_, hi_c = cols_;  // valid state rectangle
+      for (const auto& c : centre) {
+        // Top-left of the rotated patch relative to the window's top-left cell, rounded.
+        const double x = cs * c[0] - sn * c[1];
+        const double y = sn * c[0] + cs * c[1];
+        const auto dr = static_cast<Eigen::Index>(std::floor(0.5 * h + y - 0.5 * p + 0.5));
+        const auto dc = static_cast<Eigen::Index>(std::floor(0.5 * w + x - 0.5 * p + 0.5));
+        t.field_offset.push_back({dr, dc});
+        t.canvas_top_left.push_back({pad_rows + dr, pad_cols + dc});
+        TACMAP_ASSERT(pad_rows + dr >= 0 && pad_rows + dr + pi <= canvas_rows_ &&
+                          pad_cols + dc >= 0 && pad_cols + dc + pi <= canvas_cols_,
+                      "a rotated patch left the canvas");
+        lo_r = std::max(lo_r, -dr);
+        lo_c = std::max(lo_c, -dc);
+        hi_r = std::min(hi_r, field_rows_ - dr);
+        hi_c = std::min(hi_c, field_cols_ - dc);
+      }
+      t.first_row = lo_r;
+      t.first_col = lo_c;
+      t.valid_rows = std::max<Eigen::Index>(0, hi_r - lo_r);
+      t.valid_cols = std::max<Eigen::Index>(0, hi_c - lo_c);
+
+      // Canvas pixel centre -> offset from the sensor centre (map frame) -> sensor frame
+      // R(-theta) -> tactile pixel coordinates, clamped to the image (edge pixels repeat).
+      const auto n = static_cast<std::size_t>(canvas_rows_ * canvas_cols_);
+      t.source.resize(n);
+      t.weight.resize(n);
+      t.step_x.resize(n);
+      t.step_y.resize(n);
+      for (Eigen::Index r = 0; r < canvas_rows_; ++r)
+        for (Eigen::Index c = 0; c < canvas_cols_; ++c) {
+          const double x = static_cast<double>(c) + 0.5 - 0.5 * static_cast<double>(canvas_cols_);
+          const double y = static_cast<double>(r) + 0.5 - 0.5 * static_cast<double>(canvas_rows_);
+          const double u = cs * x + sn * y;
+          const double v = -sn * x + cs * y;
+          const double col = std::clamp(u + 0.5 * w - 0.5, 0.0, w - 1.0);
+          const double row = std::clamp(v + 0.5 * h - 0.5, 0.0, h - 1.0);
+          const double c0 = std::floor(col);
+          const double r0 = std::floor(row);
+          const double fx = col - c0;
+          const double fy = row - r0;
+          const auto k = static_cast<std::size_t>(r * canvas_cols_ + c);
+          t.source[k] = static_cast<std::int32_t>(r0 * w + c0);
+          t.step_x[k] = c0 + 1.0 < w ? 1 : 0;
+          t.step_y[k] = r0 + 1.0 < h ? static_cast<std::int32_t>(window_.width) : 0;
+          t.weight[k] = {static_cast<float>((1 - fx) * (1 - fy)), static_cast<float>(fx * (1 - fy)),
+                         static_cast<float>((1 - fx) * fy), static_cast<float>(fx * fy)};
+        }
+    }
+  }
+
+  void render(const image<scalar_type>& z, const heading_tables& t,
+              image<scalar_type>& canvas) const {
+    const scalar_type* src = z.data();  // row-major, window_.width per row
+    scalar_type* dst = canvas.data();
+    const auto n = static_cast<std::size_t>(canvas.size());
+    for (std::size_t k = 0; k < n; ++k) {
+      const scalar_type* s = src + t.source[k];
+      const auto& wk = t.weight[k];
+      const std::int32_t sx = t.step_x[k];
+      const std::int32_t sy = t.step_y[k];
+      dst[k] = static_cast<scalar_type>(wk[0]) * s[0] + static_cast<scalar_type>(wk[1]) * s[sx] +
+               static_cast<scalar_type>(wk[2]) * s[sy] + static_cast<scalar_type>(wk[3]) * s[sy + sx];
+    }
+  }
+
+  void check_measurement(const measurement_type& z) const {
+    if (z.rows() != window_.height || z.cols() != window_.width)
+      detail::fail("rotated_descriptor_likelihood: tactile image is ", z.rows(), " x ", z.cols(),
+                   " px (rows x cols); expected ", window_.height, " x ", window_.width,
+                   " (the sensor window at map scale, in the sensor's own frame — preprocess "
+                   "the frame first)");
+    if (!detail::all_finite(z))
+      detail::fail(
+          "rotated_descriptor_likelihood: the tactile image contains NaN or infinite pixels");
+  }
+
+  template <class G>
+  void check_grid(const G& grid) const {
+    if (grid.rows() != rows_ || grid.cols() != cols_ || grid.size() != rows_ * cols_ * angles_)
+      detail::fail("rotated_descriptor_likelihood: the grid has ", grid.size(), " states (",
+                   grid.rows(), " x ", grid.cols(), " per layer) but the map, window and ",
+                   angles_, " headings give ", rows_ * cols_ * angles_, " (", rows_, " x ", cols_,
+                   " per layer); build the pose grid and the model from the same map, window "
+                   "and angle count");
+  }
+
+  Descriptor descriptor_;
+  rotated_likelihood_params params_;
+  pixel_size window_;
+  int angles_;
+  Eigen::Index m_count_ = 0;
+  Eigen::Index rows_ = 0;  // states down one layer
+  Eigen::Index cols_ = 0;  // states across one layer
+  Eigen::Index field_rows_ = 0;
+  Eigen::Index field_cols_ = 0;
+  Eigen::Index canvas_rows_ = 0;
+  Eigen::Index canvas_cols_ = 0;
+  detail::descriptor_tiles<scalar_type> field_tiles_;
+  std::vector<heading_tables> heading_;
+  // Per-touch distances (positions x M * angles), kept between calls: not reentrant, like
+  // descriptor_likelihood. One filter per thread.
+  mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> workspace_;
+};
+
+}  // namespace tacmap

@@ -1,0 +1,163 @@
+// tacmap: `pose_odometry_gaussian` — the motion model over (x, y, theta) pose grids.
+//
+// Odometry from an arm or a finger is naturally expressed in the sensor's own frame: "moved
+// 4 mm along the array's columns and turned 5 degrees". For a state with heading theta the
+// displacement in the map frame is R(theta) (du, dv) (pose_grid.hpp gives the convention), so it
+// differs from layer to layer; the turn moves belief from heading layer to heading layer.
+// The model applies, in this order (translate in the frame of the previous heading, then turn):
+//  1. Per heading layer a: the planar model (`odometry_gaussian`: bilinear sub-pixel shift and
+//     Gaussian spread over k neighbours, sigma_mm) with the map-frame displacement
+//     R(theta_a) (du, dv). Mass leaving the layer's image is dropped or clamped per `boundary`.
+//  2. Across layers: a circular convolution along the heading axis — the turn dtheta split into
+//     whole steps and a fraction (linear interpolation between the two nearest layers, so the
+//     predicted mean heading equals the odometry's) and a wrapped Gaussian of sigma_rad.
+// Everything is whole-layer array work; layers without belief mass are skipped.
+#pragma once
+
+#include <cmath>
+#include <vector>
+
+#include "tacmap/grid/pose_grid.hpp"
+#include "tacmap/motion/odometry_gaussian.hpp"
+
+namespace tacmap {
+
+/// Odometry in the sensor frame at the previous pose: a translation along the array's columns
+/// (du) and rows (dv), mm, then a turn, radians (positive: clockwise on screen, as pose_grid's
+/// headings).
+struct sensor_odometry {
+  double du_mm = 0.0;
+  double dv_mm = 0.0;
+  double dtheta_rad = 0.0;
+};
+
+/// Configuration of `pose_odometry_gaussian`.
+struct pose_odometry_gaussian_params {
+  double sigma_mm = 1.0;      ///< translation noise per axis (as odometry_gaussian)
+  int k = 8;                  ///< translation noise neighbours (as odometry_gaussian)
+  double sigma_rad = 0.0873;  ///< turn noise, radians (5 degrees)
+  off_grid boundary = off_grid::renormalize;
+};
+
+/// Grids `pose_odometry_gaussian` moves over: layers of headings over a metric planar grid.
+template <class G>
+concept metric_pose_grid = state_grid<G> && G::dimension == 3 &&
+                           requires(const G& g, Eigen::Index a) {
+  { g.mm_per_px() } -> std::convertible_to<double>;
+  { g.angle_count() } -> std::convertible_to<int>;
+  { g.heading(a) } -> std::convertible_to<double>;
+  { g.layer_size() } -> std::convertible_to<Eigen::Index>;
+};
+
+/// Sensor-frame odometry with Gaussian noise on translation and turn, over a `pose_grid`.
+class pose_odometry_gaussian {
+ public:
+  using control_type = sensor_odometry;
+
+  /// Throws std::invalid_argument for a translation sigma or k that `odometry_gaussian` rejects,
+  /// or a turn sigma that is not finite and > 0.
+  explicit pose_odometry_gaussian(pose_odometry_gaussian_params params = {})
+      : params_(params),
+        planar_({.sigma_mm = params.sigma_mm, .k = params.k, .boundary = params.boundary}) {
+    if (!(std::isfinite(params.sigma_rad) && params.sigma_rad > 0.0))
+      detail::fail("pose_odometry_gaussian: sigma_rad = ", params.sigma_rad,
+                   "; expected a finite turn noise > 0 radians (e.g. 0.0873 = 5 degrees)");
+  }
+
+  [[nodiscard]] const pose_odometry_gaussian_params& params() const { return params_; }
+
+  template <metric_pose_grid G>
+  prediction_report predict(const G& grid, const belief_array<G>& in, belief_array<G>& out,
+                            const sensor_odometry& u) const {
+    using T = typename G::scalar_type;
+    if (!(std::isfinite(u.du_mm) && std::isfinite(u.dv_mm) && std::isfinite(u.dtheta_rad)))
+      detail::fail("pose_odometry_gaussian: odometry (du_mm, dv_mm, dtheta_rad) = (", u.du_mm, ", ",
+                   u.dv_mm, ", ", u.dtheta_rad,
+                   "); expected finite values (mm, mm, rad) — a NaN usually means a dropped "
+                   "position or orientation sample");
+    const auto layers = static_cast<Eigen::Index>(grid.angle_count());
+    const Eigen::Index plane = grid.layer_size();
+    TACMAP_ASSERT(in.size() == plane * layers && out.size() == in.size(),
+                  "belief buffers must match the grid");
+    const double step = 2.0 * std::numbers::pi / static_cast<double>(layers);
+    if (std::abs(u.dtheta_rad) > 1e3)
+      detail::fail("pose_odometry_gaussian: turn dtheta = ", u.dtheta_rad,
+                   " rad; expected the turn since the previous touch (radians, not degrees?)");
+
+    // 1. Translate every layer in its own heading's frame.
+    auto& moved = moved_<T>();
+    moved.resize(in.size());
+    // Pixels via mm_per_px(): the only scale metric_pose_grid promises.
+    const double sigma_px = params_.sigma_mm / grid.mm_per_px();
+    for (Eigen::Index a = 0; a < layers; ++a) {
+      const Eigen::Map<const image<T>> src(in.data() + a * plane, grid.rows(), grid.cols());
+      Eigen::Map<image<T>> dst(moved.data() + a * plane, grid.rows(), grid.cols());
+      if (!(src.maxCoeff() > T(0))) {
+        dst.setZero();
+        continue;
+      }
+      const double c = std::cos(grid.heading(a));
+      const double s = std::sin(grid.heading(a));
+      const double dx = c * u.du_mm - s * u.dv_mm;
+      const double dy = s * u.du_mm + c * u.dv_mm;
+      planar_.transport(src, dst, dx / grid.mm_per_px(), dy / grid.mm_per_px(), sigma_px);
+    }
+
+    // 2. Turn: out_b = sum_a moved_a w(b - a), circular. Taps: a Gaussian over whole steps
+    //    (normalised over the taps kept), each split bilinearly by the turn's fraction.
+    const double shift = u.dtheta_rad / step;
+    const double whole = std::floor(shift);
+    const double frac = shift - whole;
+    const double sigma_steps = params_.sigma_rad / step;
+    const auto radius = static_cast<Eigen::Index>(
+        std::min<double>(std::ceil(3.0 * sigma_steps), static_cast<double>(layers)));
+    std::vector<double> tap(static_cast<std::size_t>(layers), 0.0);  // weight per offset mod L
+    double norm = 0.0;
+    for (Eigen::Index j = -radius; j <= radius; ++j)
+      norm += std::exp(-0.5 * static_cast<double>(j * j) / (sigma_steps * sigma_steps));
+    const auto base = static_cast<Eigen::Index>(whole);
+    const auto wrap = [layers](Eigen::Index o) { return ((o % layers) + layers) % layers; };
+    for (Eigen::Index j = -radius; j <= radius; ++j) {
+      const double g =
+          std::exp(-0.5 * static_cast<double>(j * j) / (sigma_steps * sigma_steps)) / norm;
+      tap[static_cast<std::size_t>(wrap(j + base))] += g * (1.0 - frac);
+      tap[static_cast<std::size_t>(wrap(j + base + 1))] += g * frac;
+    }
+    out.setZero();
+    for (Eigen::Index o = 0; o < layers; ++o) {
+      const auto w = static_cast<T>(tap[static_cast<std::size_t>(o)]);
+      if (!(w > T(0))) continue;
+      for (Eigen::Index a = 0; a < layers; ++a)
+        out.segment(wrap(a + o) * plane, plane) += w * moved.segment(a * plane, plane);
+    }
+
+    const double kept = static_cast<double>(out.sum());
+    const double before = static_cast<double>(in.sum());
+    if (!(kept > 0.0) || !std::isfinite(kept))
+      detail::fail<std::domain_error>(
+          "pose_odometry_gaussian: odometry (", u.du_mm, ", ", u.dv_mm, ") mm, turn ", u.dtheta_rad,
+          " rad moves all belief mass off the grid; expected a motion that keeps the sensor "
+          "over the map — check the units (mm, rad) and the frame (sensor frame, not map "
+          "frame), or use off_grid::clamp");
+    out *= static_cast<T>(1.0 / kept);
+    return {std::clamp(1.0 - kept / before, 0.0, 1.0)};
+  }
+
+ private:
+  template <class T>
+  Eigen::Array<T, Eigen::Dynamic, 1>& moved_() const {
+    if constexpr (std::is_same_v<T, float>)
+      return moved_f_;
+    else
+      return moved_d_;
+  }
+
+  pose_odometry_gaussian_params params_;
+  odometry_gaussian planar_;
+  // Per-layer translated belief, kept between calls (no allocation per predict): one model
+  // object is not reentrant, like odometry_gaussian.
+  mutable Eigen::ArrayXf moved_f_;
+  mutable Eigen::ArrayXd moved_d_;
+};
+
+}  // namespace tacmap
