@@ -56,6 +56,7 @@
 #include <iterator>
 #include <map>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
@@ -202,6 +203,9 @@ int main(int argc, char** argv) try {
   std::string scenario_name = "ideal";
   double tempering = 1.0, motion_sigma = 1.0;
   int motion_k = 8;
+  std::vector<int> headings{0};
+  bool random_orientation = false;
+  double turn_sigma_deg = 5.0;
   std::string output = "evaluation.csv";
   double min_success = -1.0;
   bool quiet = false;
@@ -258,6 +262,16 @@ int main(int argc, char** argv) try {
   app.add_option("--motion-sigma", motion_sigma, "odometry noise sigma, mm")
       ->check(CLI::PositiveNumber);
   app.add_option("--motion-k", motion_k, "odometry noise neighbours (4, 8, 12, 20, 24, ...)");
+  app.add_option("--headings", headings,
+                 "0 = known orientation (the paper); N = localize x, y AND heading over N "
+                 "headings (comma-separated list to compare, e.g. 0,36)")
+      ->delimiter(',')
+      ->check(CLI::Range(0, 3600));
+  app.add_flag("--random-orientation", random_orientation,
+               "configurations with headings > 0: each sequence's sensor heading is drawn "
+               "uniformly (known-orientation ones keep heading 0)");
+  app.add_option("--turn-sigma", turn_sigma_deg, "heading noise of the pose motion model, degrees")
+      ->check(CLI::PositiveNumber);
   app.add_option("--output,-o", output, "CSV file to write");
   app.add_option(
       "--min-success-rate", min_success,
@@ -363,6 +377,30 @@ int main(int argc, char** argv) try {
           }
   }
 
+  // One copy of every configuration per --headings value (NCC only with known orientation).
+  {
+    std::vector<tacmap::localization_config> expanded;
+    for (const int h : headings)
+      for (auto c : configs) {
+        if (h > 0 && c.model == tacmap::measurement_kind::ncc) {
+          std::fprintf(stderr,
+                       "tacmap-evaluate: skipping ncc with --headings %d (no rotated NCC "
+                       "model; descriptor models only)\n",
+                       h);
+          continue;
+        }
+        c.headings = h;
+        c.random_orientation = h > 0 && random_orientation;
+        c.turn_sigma_rad = turn_sigma_deg * std::numbers::pi / 180.0;
+        expanded.push_back(c);
+      }
+    configs = std::move(expanded);
+    if (configs.empty())
+      throw CLI::ValidationError("--headings",
+                                 "no configuration left to run (no rotated NCC model: use "
+                                 "--model sift_lite or classic_sift with --headings > 0)");
+  }
+
   std::vector<named_map> maps;
   if (!no_gecko)
     maps.push_back(
@@ -380,7 +418,7 @@ int main(int argc, char** argv) try {
                                              "' for writing; check the folder exists");
   csv << "map,config,model,pairing,shape,features,sequence,touch,location,true_x_mm,true_y_mm,"
          "map_x_mm,map_y_mm,error_mm,entropy_nats,accepted,localized,touches_to_localize,scenario,"
-         "tau\n";
+         "tau,headings,true_theta_rad,map_theta_rad\n";
 
   std::size_t total = 0;
   for (const auto& m : maps) {
@@ -427,7 +465,8 @@ int main(int argc, char** argv) try {
               << csv_number(r.error_mm) << ',' << csv_number(r.entropy_nats) << ','
               << (r.accepted ? 1 : 0) << ',' << (ok ? 1 : 0) << ','
               << (t ? std::to_string(*t) : std::string()) << ',' << to_string(scenario) << ','
-              << (config.tau ? csv_number(*config.tau) : std::string()) << '\n';
+              << (config.tau ? csv_number(*config.tau) : std::string()) << ',' << config.headings
+              << ',' << csv_number(r.true_theta_rad) << ',' << csv_number(r.map_theta_rad) << '\n';
         ++done;
         if (!quiet) progress(done, total, m.name + " " + config.name());
       }

@@ -3,6 +3,7 @@
 #include <doctest/doctest.h>
 
 #include <random>
+#include <vector>
 
 #include "tacmap/measurement/detail/distance_kernel.hpp"
 
@@ -71,4 +72,37 @@ TEST_CASE("distances_each with an output stride equal to the positions fills a d
   for (Eigen::Index j = 0; j < 6; ++j)
     for (Eigen::Index q = 0; q < positions; ++q)
       REQUIRE(out(q, j) == doctest::Approx(std::sqrt((f.col(q) - g.col(j)).square().sum())));
+}
+
+TEST_CASE("distances_each with position ranges computes what each descriptor needs") {
+  // 7 descriptors (two groups of 3 and a single one) over 100 positions; each group needs a
+  // different range. Within a range the outputs equal the full computation; whole tile blocks
+  // that no descriptor of a group needs stay untouched (the sentinel).
+  std::mt19937 rng(5);
+  const Eigen::Index positions = 100;
+  Eigen::ArrayXXf f(32, positions);
+  Eigen::ArrayXXf g(32, 7);
+  for (float& v : f.reshaped()) v = static_cast<float>(rng() % 1000) / 1000.0F;
+  for (float& v : g.reshaped()) v = static_cast<float>(rng() % 1000) / 1000.0F;
+  const tacmap::detail::descriptor_tiles<float> tiles(f);
+  Eigen::ArrayXXf full(positions, 7);
+  tacmap::detail::distances_each(tiles, g, full.data(), positions);
+  const std::vector<tacmap::detail::position_range> ranges{{0, 10},   {5, 20},   {0, 0}, {60, 100},
+                                                           {60, 100}, {60, 100}, {0, 0}};
+  Eigen::ArrayXXf part = Eigen::ArrayXXf::Constant(positions, 7, -1.0F);
+  tacmap::detail::distances_each(tiles, g, part.data(), positions, ranges.data());
+  for (Eigen::Index j = 0; j < 7; ++j)
+    for (Eigen::Index q = ranges[static_cast<std::size_t>(j)].begin;
+         q < ranges[static_cast<std::size_t>(j)].end; ++q) {
+      CAPTURE(j);
+      CAPTURE(q);
+      CHECK(part(q, j) == full(q, j));
+    }
+  // Group 0 needs positions 0..19 only: the last tiles (beyond the first block of 3 x 8) untouched.
+  const Eigen::Index block = 3 * tacmap::detail::descriptor_tiles<float>::width;
+  if (block < positions) CHECK(part(positions - 1, 0) == -1.0F);
+  // The single descriptor 6 needs nothing: never computed.
+  CHECK((part.col(6) == -1.0F).all());
+  // Group 1 (needs 60..99): the first positions untouched.
+  CHECK(part(0, 3) == -1.0F);
 }

@@ -293,6 +293,21 @@ class dense_sift {
   /// (as `compute`), or when a patch does not lie inside the image.
   [[nodiscard]] Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic> describe_at(
       const image_view<T>& img, std::span<const grid_cell> top_left) const {
+    workspace scratch;
+    return describe_at(img, top_left, scratch);
+  }
+
+  /// Scratch memory `describe_at` can reuse between calls (one per thread). Why: the orientation
+  /// channels of a 46 x 46 canvas take 128 KB, glibc serves blocks that large straight from the
+  /// OS, and the fresh pages' faults cost more than computing the channels (measured: 50 us per
+  /// call allocating, 13 us reusing).
+  struct workspace {
+    Eigen::Array<T, Eigen::Dynamic, 1> channels;
+  };
+
+  /// `describe_at` reusing `scratch`'s memory.
+  [[nodiscard]] Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic> describe_at(
+      const image_view<T>& img, std::span<const grid_cell> top_left, workspace& scratch) const {
     check_image(img, "describe_at");
     const Eigen::Index last_row = img.rows() - params_.patch_size;
     const Eigen::Index last_col = img.cols() - params_.patch_size;
@@ -326,7 +341,7 @@ class dense_sift {
         sp.end = std::max(sp.end, x1);
       }
     }
-    Eigen::Array<T, Eigen::Dynamic, 1> channels;
+    Eigen::Array<T, Eigen::Dynamic, 1>& channels = scratch.channels;
     orientation_channels(img, channels, &spans);
     detail::dsift::patch_pooler<NumBins, NumAngles, T> pool(pooling_, channels.data(), img.cols(),
                                                             margin(), bin_);

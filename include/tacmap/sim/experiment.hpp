@@ -38,10 +38,13 @@
 #include "tacmap/descriptor/dense_sift.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/grid/planar_grid.hpp"
+#include "tacmap/grid/pose_grid.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/measurement/descriptor_likelihood.hpp"
 #include "tacmap/measurement/ncc_likelihood.hpp"
+#include "tacmap/measurement/rotated_descriptor_likelihood.hpp"
 #include "tacmap/motion/odometry_gaussian.hpp"
+#include "tacmap/motion/pose_odometry_gaussian.hpp"
 #include "tacmap/sim/protocol.hpp"
 #include "tacmap/sim/random.hpp"
 #include "tacmap/sim/scenario.hpp"
@@ -97,6 +100,14 @@ struct localization_config {
   /// Camera map, registration and per-press effects (sim/scenario.hpp); ideal by default.
   scenario_params scenario{};
   preprocess_params preprocessing{};  ///< thresholds; mm_per_px is replaced by the map's
+  /// Unknown orientation (issue 6): 0 localizes over (x, y) with the heading known (the paper);
+  /// N >= 1 localizes over (x, y, theta) with a `pose_grid` of N headings, the
+  /// `rotated_descriptor_likelihood` (descriptor models only) and sensor-frame odometry.
+  int headings = 0;
+  /// Each sequence's sensor heading drawn uniformly from [-pi, pi) (its own stream of the
+  /// simulator seed) instead of 0; the odometry is then reported in the sensor's frame.
+  bool random_orientation = false;
+  double turn_sigma_rad = 0.0873;  ///< pose motion: turn noise (headings > 0)
 
   /// A short name for tables: "sift_lite/all_pairs/inverse/per_window", with "/tau=0.5" when
   /// `tau` is set.
@@ -105,6 +116,9 @@ struct localization_config {
                           ? std::string("ncc")
                           : std::string(to_string(model)) + "/" + to_string(pairs) + "/" +
                                 to_string(shape) + "/" + to_string(features);
+    if (headings > 0)
+      out = std::string(to_string(model)) + "/" + to_string(pairs) + "/" + to_string(shape) +
+            "/headings=" + std::to_string(headings);
     if (tau) {
       std::ostringstream t;
       t << *tau;
@@ -122,9 +136,11 @@ struct touch_record {
   double true_y_mm = 0.0;
   double map_x_mm = 0.0;  ///< the belief's most probable state after this touch
   double map_y_mm = 0.0;
-  double error_mm = 0.0;      ///< distance between the two
-  double entropy_nats = 0.0;  ///< the belief's entropy after this touch
-  bool accepted = true;       ///< false: preprocess rejected the frame, no update
+  double error_mm = 0.0;        ///< distance between the two
+  double true_theta_rad = 0.0;  ///< the sensor's heading on the map (0 unless random)
+  double map_theta_rad = 0.0;   ///< the MAP state's heading (pose grids; else 0 = known)
+  double entropy_nats = 0.0;    ///< the belief's entropy after this touch
+  bool accepted = true;         ///< false: preprocess rejected the frame, no update
   frame_rejection rejection = frame_rejection::none;
 };
 
@@ -227,11 +243,51 @@ class configured_measurement {
   variant_type model_;
 };
 
+/// The (x, y, theta) counterpart of `configured_measurement`: the rotated descriptor models.
+class configured_rotated_measurement {
+ public:
+  using measurement_type = image<float>;
+
+  /// Throws std::invalid_argument for NCC (no rotated NCC model ships) or bad parameters.
+  configured_rotated_measurement(const localization_config& config, const image<float>& map,
+                                 const pose_grid<float>& grid)
+      : model_(make(config, map, grid)) {}
+
+  template <class G>
+  void log_likelihood(const G& grid, const measurement_type& z, belief_array<G>& out) const {
+    std::visit([&](const auto& m) { m.log_likelihood(grid, z, out); }, model_);
+  }
+
+ private:
+  using variant_type = std::variant<rotated_descriptor_likelihood<sift_lite>,
+                                    rotated_descriptor_likelihood<classic_sift>>;
+
+  static variant_type make(const localization_config& config, const image<float>& map,
+                           const pose_grid<float>& grid) {
+    if (config.model == measurement_kind::ncc)
+      detail::fail("localization_config: headings = ", config.headings,
+                   " (unknown orientation) needs a descriptor model; got ncc. Use sift_lite or "
+                   "classic_sift, or headings = 0 for NCC with a known orientation");
+    rotated_likelihood_params p;
+    p.pairs = config.pairs;
+    p.shape = config.shape;
+    if (config.tau) p.tau = *config.tau;
+    p.tempering = config.tempering;
+    if (config.model == measurement_kind::lite)
+      return variant_type(std::in_place_index<0>, sift_lite{}, map, grid, p);
+    return variant_type(std::in_place_index<1>, classic_sift{}, map, grid, p);
+  }
+
+  variant_type model_;
+};
+
 /// One map and one configuration: the grid, the filter (with its measurement model built once)
 /// and the simulator's relief. `run` replays a sequence from a uniform belief.
 class localization_experiment {
  public:
   using filter_type = bayes_filter<planar_grid<float>, odometry_gaussian, configured_measurement>;
+  using pose_filter_type =
+      bayes_filter<pose_grid<float>, pose_odometry_gaussian, configured_rotated_measurement>;
 
   /// Throws std::invalid_argument for a protocol whose map is empty or smaller than the sensor's
   /// window, or for out-of-range configuration values (named by the component that checks them).
@@ -242,16 +298,41 @@ class localization_experiment {
         relief_(protocol.relief_mm()),
         visual_map_(camera_image(protocol.map, relief_, protocol.mm_per_px, config_.scenario,
                                  scenario_seed(config_.simulator_seed, 0))),
-        margin_px_(config_.scenario.moves_sensor() ? margin_px(protocol, config_) : 0),
-        pressed_relief_(margin_px_ > 0 ? padded(relief_, margin_px_) : relief_),
-        filter_(planar_grid<float>(protocol.map_size(), protocol.mm_per_px, window_),
-                odometry_gaussian({.sigma_mm = config_.motion_sigma_mm, .k = config_.motion_k}),
-                configured_measurement(config_, visual_map_, window_)) {
+        margin_px_(config_.scenario.moves_sensor() || config_.random_orientation
+                       ? margin_px(protocol, config_)
+                       : 0),
+        pressed_relief_(margin_px_ > 0 ? padded(relief_, margin_px_) : relief_) {
     config_.preprocessing.mm_per_px = protocol.mm_per_px;
+    const planar_grid<float> positions(protocol.map_size(), protocol.mm_per_px, window_);
+    if (config_.headings < 0)
+      detail::fail("localization_config: headings = ", config_.headings,
+                   "; expected 0 (known orientation) or the number of headings of a pose grid");
+    if (config_.headings == 0) {
+      filter_.emplace(
+          positions,
+          odometry_gaussian({.sigma_mm = config_.motion_sigma_mm, .k = config_.motion_k}),
+          configured_measurement(config_, visual_map_, window_));
+    } else {
+      const pose_grid<float> grid(positions, config_.headings);
+      pose_filter_.emplace(grid,
+                           pose_odometry_gaussian({.sigma_mm = config_.motion_sigma_mm,
+                                                   .k = config_.motion_k,
+                                                   .sigma_rad = config_.turn_sigma_rad}),
+                           configured_rotated_measurement(config_, visual_map_, grid));
+    }
   }
 
   [[nodiscard]] const localization_config& config() const { return config_; }
-  [[nodiscard]] const filter_type& filter() const { return filter_; }
+  /// The planar filter (config().headings == 0).
+  [[nodiscard]] const filter_type& filter() const {
+    TACMAP_ASSERT(filter_.has_value(), "filter(): this experiment localizes over (x, y, theta)");
+    return *filter_;
+  }
+  /// The (x, y, theta) filter (config().headings > 0).
+  [[nodiscard]] const pose_filter_type& pose_filter() const {
+    TACMAP_ASSERT(pose_filter_.has_value(), "pose_filter(): this experiment is planar");
+    return *pose_filter_;
+  }
   /// The map the measurement model matches against: the protocol's image, or what the
   /// scenario's camera makes of it.
   [[nodiscard]] const image<float>& visual_map() const { return visual_map_; }
@@ -259,6 +340,14 @@ class localization_experiment {
   /// Replays sequence `index` of the protocol. `keep_images`: also return every preprocessed
   /// tactile image and belief image. Throws std::invalid_argument for an index out of range.
   [[nodiscard]] sequence_result run(std::size_t index, bool keep_images = false) {
+    if (filter_) return run_on(*filter_, index, keep_images);
+    return run_on(*pose_filter_, index, keep_images);
+  }
+
+ private:
+  template <class Filter>
+  sequence_result run_on(Filter& filter, std::size_t index, bool keep_images) {
+    constexpr bool pose = Filter::grid_type::dimension == 3;
     if (index >= protocol_->sequences.size())
       detail::fail("localization_experiment::run: sequence ", index,
                    " does not exist; expected 0 .. ",
@@ -288,16 +377,35 @@ class localization_experiment {
     const double cy =
         0.5 * static_cast<double>(protocol_->map_size().height) * protocol_->mm_per_px;
 
-    filter_.reset();
+    // The sensor's heading on the object for this sequence (random_orientation), from its own
+    // stream so that the other draws do not change with it.
+    double heading = 0.0;
+    if (config_.random_orientation) {
+      sim_rng heading_rng(scenario_seed(config_.simulator_seed ^ 0x5851F42D4C957F2DULL, index));
+      heading = pose_grid<float>::wrap_angle(-pi + 2.0 * pi * heading_rng.uniform());
+    }
+
+    filter.reset();
     sequence_result result;
     result.sequence = index;
     for (std::size_t step = 0; step < sequence.size(); ++step) {
       const protocol_step& st = sequence[step];
       const touch_location& truth = protocol_->locations.at(st.location);
-      if (step > 0) filter_.predict(st.measured_motion);
+      if (step > 0) {
+        if constexpr (pose) {
+          // The arm reports its motion in the sensor's own frame: R(-heading) (dx, dy).
+          const double c = std::cos(heading), sn = std::sin(heading);
+          const double dx = st.measured_motion.dx_mm, dy = st.measured_motion.dy_mm;
+          filter.predict(
+              {.du_mm = c * dx + sn * dy, .dv_mm = -sn * dx + c * dy, .dtheta_rad = 0.0});
+        } else {
+          filter.predict(st.measured_motion);
+        }
+      }
       // Where the sensor really presses on the object: the true map pose carried by the
       // registration error, turned by this press's orientation jitter; and how it presses.
       map_pose pressed = truth.pose();
+      pressed.theta_rad = pose_grid<float>::wrap_angle(pressed.theta_rad + heading);
       press_variation press;
       if (sc.moves_sensor()) {
         const double dx = pressed.x_mm - cx, dy = pressed.y_mm - cy;
@@ -312,9 +420,9 @@ class localization_experiment {
         press.tilt_u_rad = std::clamp(sc.tilt_jitter_deg * pi / 180.0 * tilt_u, -0.4, 0.4);
         press.tilt_v_rad = std::clamp(sc.tilt_jitter_deg * pi / 180.0 * tilt_v, -0.4, 0.4);
         press.depth_scale = std::max(0.2, 1.0 + sc.press_depth_jitter * depth);
-        pressed.x_mm += offset_mm;
-        pressed.y_mm += offset_mm;
       }
+      pressed.x_mm += offset_mm;
+      pressed.y_mm += offset_mm;
       const preprocessed_frame pre =
           preprocess(simulator.render(pressed, press), config_.preprocessing);
       touch_record rec;
@@ -324,22 +432,30 @@ class localization_experiment {
       rec.true_y_mm = truth.y_mm;
       rec.accepted = pre.accepted();
       rec.rejection = pre.rejection;
-      if (rec.accepted) filter_.update(pre.pixels);
-      const auto est = filter_.estimate();
+      if (rec.accepted) filter.update(pre.pixels);
+      const auto est = filter.estimate();
       rec.map_x_mm = est.map_mm(0);
       rec.map_y_mm = est.map_mm(1);
       rec.error_mm = std::hypot(rec.map_x_mm - truth.x_mm, rec.map_y_mm - truth.y_mm);
+      rec.true_theta_rad = heading;
+      if constexpr (pose) rec.map_theta_rad = est.map_mm(2);
       rec.entropy_nats = est.entropy_nats;
       result.touches.push_back(rec);
       if (keep_images) {
         result.tactile_images.push_back(rec.accepted ? pre.pixels : image<float>{});
-        result.beliefs.push_back(filter_.belief_image());
+        if constexpr (pose) {  // the position marginal: the belief summed over headings
+          image<float> marginal = filter.belief_image(0);
+          for (Eigen::Index a = 1; a < filter.grid().angle_count(); ++a)
+            marginal += filter.belief_image(a);
+          result.beliefs.push_back(marginal);
+        } else {
+          result.beliefs.push_back(filter.belief_image());
+        }
       }
     }
     return result;
   }
 
- private:
   static pixel_size checked_window(const touch_protocol& p, const localization_config& c) {
     const pixel_size w = tactile_window(c.simulator.geometry, p.mm_per_px);
     if (p.map.cols() < w.width || p.map.rows() < w.height)
@@ -390,7 +506,8 @@ class localization_experiment {
   image<float> visual_map_;
   Eigen::Index margin_px_;
   image<float> pressed_relief_;
-  filter_type filter_;
+  std::optional<filter_type> filter_;            // headings == 0
+  std::optional<pose_filter_type> pose_filter_;  // headings > 0
 };
 
 }  // namespace tacmap

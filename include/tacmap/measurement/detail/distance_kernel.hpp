@@ -176,6 +176,12 @@ void accumulate_distances(const descriptor_tiles<T>& f,
   }
 }
 
+/// A half-open range of positions [begin, end).
+struct position_range {
+  Eigen::Index begin = 0;
+  Eigen::Index end = 0;
+};
+
 /// Plain reference of `distances_each`.
 template <class T>
 void distances_each_scalar(const descriptor_tiles<T>& f,
@@ -237,19 +243,34 @@ void block_each(const descriptor_tiles<T>& f, Eigen::Index t0, const T* g, Eigen
   }
 }
 
+// True when descriptors [j, j + n) need any position of tiles [t0, t0 + tiles).
+inline bool needed(const position_range* ranges, Eigen::Index j, Eigen::Index n, Eigen::Index t0,
+                   Eigen::Index tiles, Eigen::Index width) {
+  if (ranges == nullptr) return true;
+  const Eigen::Index lo = t0 * width;
+  const Eigen::Index hi = (t0 + tiles) * width;
+  for (Eigen::Index i = j; i < j + n; ++i)
+    if (ranges[i].begin < hi && ranges[i].end > lo) return true;
+  return false;
+}
+
 template <std::size_t Tiles, class T>
 void each_descriptor(const descriptor_tiles<T>& f, Eigen::Index t0,
                      const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, T* out,
-                     Eigen::Index out_stride) {
+                     Eigen::Index out_stride, const position_range* ranges) {
+  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+  constexpr auto tiles = static_cast<Eigen::Index>(Tiles);
   const Eigen::Index stride = g.rows();
   const Eigen::Index count = g.cols();
   const T* gj = g.data();
   T* oj = out;
-  Eigen::Index left = count;
-  for (; left >= 3; left -= 3, gj += 3 * stride, oj += 3 * out_stride)
-    block_each<Tiles, 3>(f, t0, gj, stride, oj, out_stride);
-  for (; left > 0; --left, gj += stride, oj += out_stride)
-    block_each<Tiles, 1>(f, t0, gj, stride, oj, out_stride);
+  Eigen::Index j = 0;
+  for (; j + 3 <= count; j += 3, gj += 3 * stride, oj += 3 * out_stride)
+    if (needed(ranges, j, 3, t0, tiles, width))
+      block_each<Tiles, 3>(f, t0, gj, stride, oj, out_stride);
+  for (; j < count; ++j, gj += stride, oj += out_stride)
+    if (needed(ranges, j, 1, t0, tiles, width))
+      block_each<Tiles, 1>(f, t0, gj, stride, oj, out_stride);
 }
 
 }  // namespace distance_kernel
@@ -258,16 +279,20 @@ void each_descriptor(const descriptor_tiles<T>& f, Eigen::Index t0,
 /// tactile descriptors (e.g. 3 patches x 36 headings) against the map's field in ONE pass over
 /// the field — each block of tiles stays in L1 while every descriptor visits it, so the field
 /// (1.4 MB for a 120 px map) is read from memory once, not once per descriptor. Requires
-/// out_stride >= f.positions().
+/// out_stride >= f.positions(). `ranges` (optional, one per descriptor): only positions in
+/// ranges[j] are needed for descriptor j; whole blocks of tiles outside every range of a group of
+/// descriptors are skipped (their outputs are left as they were) — a turned patch near the
+/// map's edge never reads some rows of the field.
 template <class T>
 void distances_each(const descriptor_tiles<T>& f,
                     const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, T* out,
-                    Eigen::Index out_stride) {
+                    Eigen::Index out_stride, const position_range* ranges = nullptr) {
   constexpr Eigen::Index width = descriptor_tiles<T>::width;
   const Eigen::Index count = (f.positions() + width - 1) / width;
   Eigen::Index t = 0;
-  for (; t + 3 <= count; t += 3) distance_kernel::each_descriptor<3>(f, t, g, out, out_stride);
-  for (; t < count; ++t) distance_kernel::each_descriptor<1>(f, t, g, out, out_stride);
+  for (; t + 3 <= count; t += 3)
+    distance_kernel::each_descriptor<3>(f, t, g, out, out_stride, ranges);
+  for (; t < count; ++t) distance_kernel::each_descriptor<1>(f, t, g, out, out_stride, ranges);
 }
 
 }  // namespace tacmap::detail
