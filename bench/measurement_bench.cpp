@@ -57,7 +57,12 @@ void sift_lite_update_shared(benchmark::State& s) {
 }
 BENCHMARK(sift_lite_update);
 BENCHMARK(sift_lite_update_aligned);
+void sift_lite_update_shared_aligned(benchmark::State& s) {
+  descriptor_update<tacmap::sift_lite>(s, tacmap::pairing::aligned,
+                                       tacmap::window_features::shared_dense);
+}
 BENCHMARK(sift_lite_update_shared);
+BENCHMARK(sift_lite_update_shared_aligned);
 BENCHMARK(classic_sift_update);
 
 template <tacmap::window_features Features>

@@ -294,6 +294,8 @@ class descriptor_likelihood {
     dist.resize(positions, params_.pairs == pairing::all_pairs ? 1 : m_count);
     if (params_.pairs == pairing::all_pairs)
       accumulate(field_tiles_, g, 0, m_count, dist.data(), false);
+    else if constexpr (euclidean_descriptor<Descriptor>)
+      detail::distances_each(field_tiles_, g, dist.data(), positions);  // one pass, M outputs
     else
       for (Eigen::Index n = 0; n < m_count; ++n)
         accumulate(field_tiles_, g, n, 1, &dist(0, n), false);
