@@ -16,8 +16,8 @@ inline tacmap::image<float> bench_map(Eigen::Index rows = 120, Eigen::Index cols
   for (int bar = 0; bar < bars; ++bar)
     map.block(static_cast<Eigen::Index>(rng() % static_cast<unsigned>(rows - 20)),
               static_cast<Eigen::Index>(rng() % static_cast<unsigned>(cols - 20)),
-              static_cast<Eigen::Index>(3 + rng() % 17), static_cast<Eigen::Index>(3 + rng() % 17)) +=
-        1.0F;
+              static_cast<Eigen::Index>(3 + rng() % 17),
+              static_cast<Eigen::Index>(3 + rng() % 17)) += 1.0F;
   for (Eigen::Index r = 0; r < rows; ++r)
     for (Eigen::Index c = 0; c < cols; ++c)
       map(r, c) += 0.2F * std::sin(0.2F * static_cast<float>(r + 2 * c));

@@ -10,8 +10,8 @@
 #include <cmath>
 #include <random>
 
-#include "tacmap/descriptor/dense_sift.hpp"
 #include "bench_maps.hpp"
+#include "tacmap/descriptor/dense_sift.hpp"
 #include "tacmap/tacmap.hpp"
 
 namespace {

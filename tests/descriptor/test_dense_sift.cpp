@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "blob_images.hpp"
 #include "dense_sift_reference.hpp"
 #include "tacmap/descriptor/dense_sift.hpp"
 
@@ -36,21 +37,8 @@ image<T> random_image(Eigen::Index rows, Eigen::Index cols, unsigned seed) {
 template <class T>
 image<T> tactile_like_image(Eigen::Index rows, Eigen::Index cols, unsigned seed) {
   std::mt19937 gen(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
   image<T> img = image<T>::Zero(rows, cols);
-  for (int blob = 0; blob < 2; ++blob) {
-    const double cy = u(gen) * static_cast<double>(rows);
-    const double cx = u(gen) * static_cast<double>(cols);
-    const double s = 1.0 + 2.0 * u(gen);
-    const double a = 0.2 + u(gen);
-    for (Eigen::Index r = 0; r < rows; ++r) {
-      for (Eigen::Index c = 0; c < cols; ++c) {
-        const double dy = static_cast<double>(r) - cy;
-        const double dx = static_cast<double>(c) - cx;
-        img(r, c) += static_cast<T>(a * std::exp(-(dx * dx + dy * dy) / (2.0 * s * s)));
-      }
-    }
-  }
+  tacmap_test::add_blobs(img, gen, 2, 2.0);
   return img;
 }
 

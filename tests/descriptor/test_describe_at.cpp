@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "blob_images.hpp"
 #include "tacmap/descriptor/dense_sift.hpp"
 #include "test_support.hpp"
 
@@ -26,21 +27,9 @@ using tacmap_test::message_of;
 template <class T>
 image<T> test_image(Eigen::Index rows, Eigen::Index cols, unsigned seed) {
   std::mt19937 gen(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
   image<T> img = image<T>::Zero(rows, cols);
-  for (int blob = 0; blob < 3; ++blob) {
-    const double cy = u(gen) * static_cast<double>(rows);
-    const double cx = u(gen) * static_cast<double>(cols);
-    const double s = 1.0 + 3.0 * u(gen);
-    const double a = 0.2 + u(gen);
-    for (Eigen::Index r = 0; r < rows; ++r) {
-      for (Eigen::Index c = 0; c < cols; ++c) {
-        const double dy = static_cast<double>(r) - cy;
-        const double dx = static_cast<double>(c) - cx;
-        img(r, c) += static_cast<T>(a * std::exp(-(dx * dx + dy * dy) / (2.0 * s * s)));
-      }
-    }
-  }
+  tacmap_test::add_blobs(img, gen, 3, 3.0);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
   for (Eigen::Index r = 0; r < rows / 2; ++r) {
     for (Eigen::Index c = 0; c < cols; ++c) img(r, c) += static_cast<T>(0.05 * u(gen));
   }

@@ -16,6 +16,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "tacmap/angle.hpp"
 #include "tacmap/filter/detail/posterior_kernel.hpp"
 #include "tacmap/grid/concept.hpp"
 #include "tacmap/image.hpp"
@@ -246,7 +247,7 @@ class bayes_filter {
     typename estimate_type::vector_type mean = origin_mm_ + mean_offset;
     for (int k = 0; k < dim; ++k)
       if (Grid::circular[static_cast<std::size_t>(k)])
-        mean(k) = wrap_pi(
+        mean(k) = wrap_angle(
             std::atan2(sum_sin[static_cast<std::size_t>(k)], sum_cos[static_cast<std::size_t>(k)]));
     e.mean_mm = mean;
     typename estimate_type::matrix_type cov = estimate_type::matrix_type::Zero();
@@ -256,19 +257,12 @@ class bayes_filter {
       if (p == 0.0) continue;
       const auto o = offsets_mm_.col(i);
       for (int k = 0; k < dim; ++k)
-        d(k) = Grid::circular[static_cast<std::size_t>(k)] ? wrap_pi(origin_mm_(k) + o(k) - mean(k))
-                                                           : o(k) - mean_offset(k);
+        d(k) = Grid::circular[static_cast<std::size_t>(k)]
+                   ? wrap_angle(origin_mm_(k) + o(k) - mean(k))
+                   : o(k) - mean_offset(k);
       cov.noalias() += (p * d) * d.transpose();
     }
     e.covariance_mm2 = cov;
-  }
-
-  static double wrap_pi(double a) {
-    constexpr double pi = 3.14159265358979323846;
-    double w = std::fmod(a + pi, 2.0 * pi);
-    if (w < 0.0) w += 2.0 * pi;
-    w -= pi;
-    return w >= pi ? -pi : w;
   }
 
   // bel = eta * exp(ll - max ll) * bel_bar. Subtracting the maximum first means the best state's

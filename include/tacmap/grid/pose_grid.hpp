@@ -22,6 +22,7 @@
 #include <numbers>
 #include <optional>
 
+#include "tacmap/angle.hpp"
 #include "tacmap/grid/planar_grid.hpp"
 
 namespace tacmap {
@@ -173,13 +174,7 @@ class pose_grid {
   }
 
   /// theta wrapped into [-pi, pi).
-  [[nodiscard]] static double wrap_angle(double theta_rad) {
-    const double two_pi = 2.0 * std::numbers::pi;
-    double w = std::fmod(theta_rad + std::numbers::pi, two_pi);
-    if (w < 0.0) w += two_pi;
-    w -= std::numbers::pi;
-    return w >= std::numbers::pi ? -std::numbers::pi : w;
-  }
+  [[nodiscard]] static double wrap_angle(double theta_rad) { return tacmap::wrap_angle(theta_rad); }
 
  private:
   static void check_heading(double theta_rad, const char* who) {

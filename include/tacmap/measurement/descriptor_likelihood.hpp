@@ -121,6 +121,45 @@ concept samples_on_grid = descriptor<D> &&
     } -> std::convertible_to<Eigen::Array<typename D::scalar_type, Eigen::Dynamic, Eigen::Dynamic>>;
 };
 
+namespace detail {
+
+/// Checks what every descriptor measurement model needs of its map and window (`who` names the
+/// model in messages) and returns the tactile patches' top-left offsets inside the window: the
+/// grid of `patch` px patches every `spacing` px, row-major (the paper: 3 patches of 18 px,
+/// spacing 9, down a 42 x 18 window).
+inline std::vector<grid_cell> checked_patch_offsets(const char* who, const image<float>& map,
+                                                    pixel_size window, Eigen::Index patch,
+                                                    Eigen::Index spacing) {
+  if (window.width <= 0 || window.height <= 0 || map.cols() < window.width ||
+      map.rows() < window.height)
+    fail(who, ": the map is ", map.cols(), " x ", map.rows(),
+         " px (width x height) and the window ", window.width, " x ", window.height,
+         "; expected a positive window no larger than the map");
+  if (window.width < patch || window.height < patch)
+    fail(who, ": a descriptor patch of ", patch, " px does not fit the ", window.width, " x ",
+         window.height,
+         " px tactile window; expected a patch no larger than the window's shorter side "
+         "(paper: patch 18 on a 42 x 18 window)");
+  if (!all_finite(map)) fail(who, ": the map contains NaN or infinite pixels");
+  std::vector<grid_cell> offsets;
+  for (Eigen::Index oy = 0; oy + patch <= window.height; oy += spacing)
+    for (Eigen::Index ox = 0; ox + patch <= window.width; ox += spacing)
+      offsets.push_back({oy, ox});
+  return offsets;
+}
+
+/// Checks a tactile image against the model's window: its size, then its pixels.
+inline void check_tactile_image(const char* who, const image<float>& z, pixel_size window) {
+  if (z.rows() != window.height || z.cols() != window.width)
+    fail(who, ": tactile image is ", z.rows(), " x ", z.cols(), " px (rows x cols); expected ",
+         window.height, " x ", window.width,
+         " (the sensor window at map scale, in the sensor's own frame — preprocess the frame "
+         "first)");
+  if (!all_finite(z)) fail(who, ": the tactile image contains NaN or infinite pixels");
+}
+
+}  // namespace detail
+
 /// The paper's measurement model over a `planar_grid`, for any `descriptor`.
 template <descriptor Descriptor>
 class descriptor_likelihood {
@@ -136,21 +175,8 @@ class descriptor_likelihood {
       : descriptor_(std::move(descriptor)), params_(params), window_(window) {
     params.validate();
     const Eigen::Index p = descriptor_.patch_size();
-    if (window.width <= 0 || window.height <= 0 || map.cols() < window.width ||
-        map.rows() < window.height)
-      detail::fail("descriptor_likelihood: the map is ", map.cols(), " x ", map.rows(),
-                   " px (width x height) and the window ", window.width, " x ", window.height,
-                   "; expected a positive window no larger than the map");
-    if (window.width < p || window.height < p)
-      detail::fail("descriptor_likelihood: a descriptor patch of ", p, " px does not fit the ",
-                   window.width, " x ", window.height,
-                   " px tactile window; expected a patch no larger than the window's shorter side "
-                   "(paper: patch 18 on a 42 x 18 window)");
-    for (Eigen::Index oy = 0; oy + p <= window.height; oy += params.spacing)
-      for (Eigen::Index ox = 0; ox + p <= window.width; ox += params.spacing)
-        offsets_.push_back({oy, ox});
-    if (!detail::all_finite(map))
-      detail::fail("descriptor_likelihood: the map contains NaN or infinite pixels");
+    offsets_ =
+        detail::checked_patch_offsets("descriptor_likelihood", map, window, p, params.spacing);
     const image<scalar_type> map_t = map.template cast<scalar_type>();
     field_ = descriptor_.compute(map_t);
     TACMAP_ASSERT(field_.rows == map.rows() - p + 1 && field_.cols == map.cols() - p + 1,
@@ -199,12 +225,7 @@ class descriptor_likelihood {
   /// The M descriptors of a tactile image (dimension x M), in patch order.
   [[nodiscard]] Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> tactile_descriptors(
       const measurement_type& z) const {
-    if (z.rows() != window_.height || z.cols() != window_.width)
-      detail::fail("descriptor_likelihood: tactile image is ", z.rows(), " x ", z.cols(),
-                   " px (rows x cols); expected ", window_.height, " x ", window_.width,
-                   " (the sensor window at map scale — preprocess the frame first)");
-    if (!detail::all_finite(z))
-      detail::fail("descriptor_likelihood: the tactile image contains NaN or infinite pixels");
+    detail::check_tactile_image("descriptor_likelihood", z, window_);
     const image<scalar_type> zt = z.template cast<scalar_type>();
     Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g;
     // A descriptor that can describe just its spacing grid (dense_sift::sample) saves most of the

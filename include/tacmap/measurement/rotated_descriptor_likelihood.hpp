@@ -110,22 +110,8 @@ class rotated_descriptor_likelihood {
     if (angle_count < 1)
       detail::fail("rotated_descriptor_likelihood: angle_count = ", angle_count,
                    "; expected >= 1 (the pose grid's number of headings)");
-    if (window.width <= 0 || window.height <= 0 || map.cols() < window.width ||
-        map.rows() < window.height)
-      detail::fail("rotated_descriptor_likelihood: the map is ", map.cols(), " x ", map.rows(),
-                   " px (width x height) and the window ", window.width, " x ", window.height,
-                   "; expected a positive window no larger than the map");
-    if (window.width < p || window.height < p)
-      detail::fail("rotated_descriptor_likelihood: a descriptor patch of ", p,
-                   " px does not fit the ", window.width, " x ", window.height,
-                   " px tactile window; expected a patch no larger than the window's shorter "
-                   "side (paper: patch 18 on a 42 x 18 window)");
-    if (!detail::all_finite(map))
-      detail::fail("rotated_descriptor_likelihood: the map contains NaN or infinite pixels");
-    std::vector<grid_cell> offsets;
-    for (Eigen::Index oy = 0; oy + p <= window.height; oy += params.spacing)
-      for (Eigen::Index ox = 0; ox + p <= window.width; ox += params.spacing)
-        offsets.push_back({oy, ox});
+    const std::vector<grid_cell> offsets = detail::checked_patch_offsets(
+        "rotated_descriptor_likelihood", map, window, p, params.spacing);
     m_count_ = static_cast<Eigen::Index>(offsets.size());
 
     const image<scalar_type> map_t = map.template cast<scalar_type>();
@@ -176,7 +162,8 @@ class rotated_descriptor_likelihood {
     const image<scalar_type> zt = z.template cast<scalar_type>();
     Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g(descriptor_.dimension(),
                                                                 m_count_ * angles_);
-    image<scalar_type> canvas(canvas_rows_, canvas_cols_);
+    image<scalar_type>& canvas = canvas_;  // reused: one touch renders 36 canvases
+    canvas.resize(canvas_rows_, canvas_cols_);
     for (Eigen::Index a = 0; a < angles_; ++a) {
       const heading_tables& h = heading_[static_cast<std::size_t>(a)];
       render(zt, h, canvas);
@@ -403,14 +390,7 @@ class rotated_descriptor_likelihood {
   }
 
   void check_measurement(const measurement_type& z) const {
-    if (z.rows() != window_.height || z.cols() != window_.width)
-      detail::fail("rotated_descriptor_likelihood: tactile image is ", z.rows(), " x ", z.cols(),
-                   " px (rows x cols); expected ", window_.height, " x ", window_.width,
-                   " (the sensor window at map scale, in the sensor's own frame — preprocess "
-                   "the frame first)");
-    if (!detail::all_finite(z))
-      detail::fail(
-          "rotated_descriptor_likelihood: the tactile image contains NaN or infinite pixels");
+    detail::check_tactile_image("rotated_descriptor_likelihood", z, window_);
   }
 
   template <class G>
@@ -442,6 +422,7 @@ class rotated_descriptor_likelihood {
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> workspace_;
   mutable typename descriptor_workspace<Descriptor>::type scratch_;  // the descriptor's scratch
   mutable std::vector<scalar_type> mean_;  // per patch, one heading at a time
+  mutable image<scalar_type> canvas_;      // the tactile image turned to one heading
 };
 
 }  // namespace tacmap

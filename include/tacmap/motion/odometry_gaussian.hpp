@@ -127,6 +127,18 @@ void shifted_accumulate(const Eigen::Map<const image<T>>& in, Eigen::Map<image<T
   }
 }
 
+/// The end of every prediction: `out` (what the motion kept of `in`) renormalised to sum 1, and
+/// the fraction lost reported. When nothing is left, `nothing_left()` throws (it names the
+/// motion) and `out` is garbage; the filter then keeps its belief.
+template <class Array, class Fail>
+prediction_report renormalise_prediction(const Array& in, Array& out, const Fail& nothing_left) {
+  const double kept = static_cast<double>(out.sum());
+  const double before = static_cast<double>(in.sum());
+  if (!(kept > 0.0) || !std::isfinite(kept)) nothing_left();
+  out *= static_cast<typename Array::Scalar>(1.0 / kept);
+  return {std::clamp(1.0 - kept / before, 0.0, 1.0)};
+}
+
 }  // namespace detail
 
 /// Grids `odometry_gaussian` can move over: a 2-D image of states on a metric map.
@@ -189,21 +201,18 @@ class odometry_gaussian {
     transport(in_img, out_img, u.dx_mm / grid.mm_per_px(), u.dy_mm / grid.mm_per_px(),
               grid.mm_to_px(params_.sigma_mm));
 
-    const double kept = static_cast<double>(out.sum());
-    const double before = static_cast<double>(in.sum());
-    if (!(kept > 0.0) || !std::isfinite(kept))
+    return detail::renormalise_prediction(in, out, [&] {
       detail::fail<std::domain_error>(
           "odometry_gaussian: odometry (", u.dx_mm, ", ", u.dy_mm, ") mm moves all belief mass ",
           "off the grid; expected a displacement that keeps the sensor over the map — check the "
           "units (millimetres) and the map-frame calibration, or use off_grid::clamp");
-    out *= static_cast<T>(1.0 / kept);
-    return {std::clamp(1.0 - kept / before, 0.0, 1.0)};
+    });
   }
 
   /// The un-normalised core of `predict` for one belief image: out = in shifted by
   /// (shift_x_px, shift_y_px) (bilinear for the fraction) and spread by the Gaussian stencil of
   /// `sigma_px`; mass leaving the image is dropped or clamped per `params().boundary`, never
-  /// renormalised. `what` only names the control in error messages. Used per layer by
+  /// renormalised. Used per layer by
   /// multi-layer motion models (`pose_odometry_gaussian`).
   template <class T>
   void transport(const Eigen::Map<const image<T>>& in_img, Eigen::Map<image<T>>& out_img,
@@ -292,7 +301,6 @@ class odometry_gaussian {
                                      clamp);
         }
     }
-
   }
 
  private:

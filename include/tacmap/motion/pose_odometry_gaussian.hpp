@@ -146,16 +146,13 @@ class pose_odometry_gaussian {
         out.segment(wrap(a + o) * plane, plane) += w * moved.segment(a * plane, plane);
     }
 
-    const double kept = static_cast<double>(out.sum());
-    const double before = static_cast<double>(in.sum());
-    if (!(kept > 0.0) || !std::isfinite(kept))
+    return detail::renormalise_prediction(in, out, [&] {
       detail::fail<std::domain_error>(
           "pose_odometry_gaussian: odometry (", u.du_mm, ", ", u.dv_mm, ") mm, turn ", u.dtheta_rad,
           " rad moves all belief mass off the grid; expected a motion that keeps the sensor "
           "over the map — check the units (mm, rad) and the frame (sensor frame, not map "
           "frame), or use off_grid::clamp");
-    out *= static_cast<T>(1.0 / kept);
-    return {std::clamp(1.0 - kept / before, 0.0, 1.0)};
+    });
   }
 
  private:
