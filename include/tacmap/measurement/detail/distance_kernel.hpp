@@ -185,6 +185,14 @@ void accumulate_distances(const descriptor_tiles<T>& f,
   }
 }
 
+/// `n` rounded up to a whole number of 64-byte cache lines of T (a column stride for
+/// `distances_each` outputs whose columns should start on line boundaries).
+template <class T>
+[[nodiscard]] constexpr Eigen::Index cache_line_multiple(Eigen::Index n) {
+  constexpr auto per_line = static_cast<Eigen::Index>(64 / sizeof(T));
+  return (n + per_line - 1) / per_line * per_line;
+}
+
 /// A half-open range of positions [begin, end).
 struct position_range {
   Eigen::Index begin = 0;
