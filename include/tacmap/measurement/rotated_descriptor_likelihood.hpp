@@ -185,55 +185,56 @@ class rotated_descriptor_likelihood {
 
   /// The distance d(x, a, z) for every pose (layer after layer); a patch off the map counts
   /// its mean distance (see the file comment).
+  ///
+  /// The field is processed in bands of positions: all M x A distances of one band (a few
+  /// hundred KB, in L2), then at once their share of every layer. Computing every distance
+  /// first and adding them to the layers afterwards wrote and re-read M x A whole-field columns
+  /// (4.6 MB for 120 px, 36 headings) through L3 or memory.
   template <class G>
   void distances(const G& grid, const measurement_type& z, belief_array<G>& out)
       const requires std::same_as<typename G::scalar_type, scalar_type> {
     check_grid(grid);
     const auto g = tactile_descriptors(z);
+    constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
     const Eigen::Index positions = field_rows_ * field_cols_;
-    auto& dist = workspace_;
-    // Columns start on cache-line boundaries: the kernel's register-wide stores then never
-    // straddle two lines (measured: a few per cent of the whole measurement).
-    dist.resize(detail::cache_line_multiple<scalar_type>(positions), g.cols());
-    if constexpr (euclidean_descriptor<Descriptor>) {
-      detail::distances_each(field_tiles_, g, dist.data(), dist.rows(), needed_.data());
-    } else {  // a user's distance, called once per pair
-      Eigen::Array<scalar_type, Eigen::Dynamic, 1> column(field_tiles_.dimension());
-      for (Eigen::Index q = 0; q < positions; ++q) {
-        for (Eigen::Index k = 0; k < field_tiles_.dimension(); ++k)
-          column(k) = field_tiles_.at(q, k);
-        for (Eigen::Index j = 0; j < g.cols(); ++j)
-          dist(q, j) = descriptor_.distance(column, g.col(j));
+    const Eigen::Index tiles = (positions + width - 1) / width;
+    auto& band = workspace_;  // band position p - first x descriptor j
+    // Columns start on cache-line boundaries: the kernel's register-wide stores never straddle
+    // two lines.
+    band.resize(detail::cache_line_multiple<scalar_type>(band_tiles * width), g.cols());
+    out.setZero();
+    // Per patch m of heading a (a * M + m): the sum of its distances where it lands on the map.
+    sums_.assign(static_cast<std::size_t>(m_count_ * angles_), 0.0);
+    for (Eigen::Index t0 = 0; t0 < tiles; t0 += band_tiles) {
+      const Eigen::Index t1 = std::min(t0 + band_tiles, tiles);
+      const Eigen::Index first = t0 * width;
+      const Eigen::Index last = std::min(t1 * width, positions);
+      if constexpr (euclidean_descriptor<Descriptor>) {
+        detail::distances_each(field_tiles_, g, band.data(), band.rows(), needed_.data(),
+                               {t0, t1});
+      } else {  // a user's distance, called once per pair
+        Eigen::Array<scalar_type, Eigen::Dynamic, 1> column(field_tiles_.dimension());
+        for (Eigen::Index q = first; q < last; ++q) {
+          for (Eigen::Index k = 0; k < field_tiles_.dimension(); ++k)
+            column(k) = field_tiles_.at(q, k);
+          for (Eigen::Index j = 0; j < g.cols(); ++j)
+            band(q - first, j) = descriptor_.distance(column, g.col(j));
+        }
       }
+      add_band(band, first, last, out);
     }
+    // A patch that falls off the map says nothing about the pose: it contributes its mean
+    // distance over the states where it lands on the map (uninformative, neither favouring nor
+    // excluding edge poses).
     const Eigen::Index plane = rows_ * cols_;
     for (Eigen::Index a = 0; a < angles_; ++a) {
-      const heading_tables& h = heading_[static_cast<std::size_t>(a)];
-      if (params_.pairs == pairing::all_pairs) {
-        // sum_m sum_n D_n(x + o_m) = sum_m S(x + o_m) with S = sum_n D_n (kept in column 0).
-        const detail::position_range& u = needed_[static_cast<std::size_t>(a * m_count_)];
-        for (Eigen::Index n = 1; n < m_count_; ++n)
-          dist.col(a * m_count_).segment(u.begin, u.end - u.begin) +=
-              dist.col(a * m_count_ + n).segment(u.begin, u.end - u.begin);
-      }
       Eigen::Map<image<scalar_type>> layer(out.data() + a * plane, rows_, cols_);
-      // A patch that falls off the map says nothing about the pose: it contributes its mean
-      // distance over the states where it lands on the map (uninformative, neither favouring
-      // nor excluding edge poses). One pass over each patch's distances (they come from far
-      // beyond L2: M x A columns of the whole field) adds them where the patch lands and sums
-      // them for the mean, which then fills the states where it does not.
-      layer.setZero();
+      const heading_tables& h = heading_[static_cast<std::size_t>(a)];
       for (Eigen::Index m = 0; m < m_count_; ++m) {
         const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
         if (r.rows <= 0 || r.cols <= 0) continue;  // never on the map: no information at all
-        const auto src = source(dist, a, m, r);
-        double total = 0.0;
-        for (Eigen::Index i = 0; i < r.rows; ++i) {
-          layer.row(r.first_row + i).segment(r.first_col, r.cols) += src.row(i);
-          total += static_cast<double>(src.row(i).sum());  // the row is in L1 now
-        }
-        const auto mean = static_cast<scalar_type>(total / static_cast<double>(r.rows * r.cols));
-        add_outside(layer, r, mean);
+        const double total = sums_[static_cast<std::size_t>(a * m_count_ + m)];
+        add_outside(layer, r, static_cast<scalar_type>(total / static_cast<double>(r.rows * r.cols)));
       }
     }
   }
@@ -374,15 +375,54 @@ class rotated_descriptor_likelihood {
     if (right > 0) layer.block(r.first_row, r.first_col + r.cols, r.rows, right) += value;
   }
 
-  // The distances patch m of heading a reads for the states of `r` (dense map positions).
-  auto source(const Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>& dist, Eigen::Index a,
-              Eigen::Index m, const patch_reach& r) const {
-    const Eigen::Index n = params_.pairs == pairing::all_pairs ? 0 : m;
-    const Eigen::Map<const image<scalar_type>> dn(&dist(0, a * m_count_ + n), field_rows_,
-                                                  field_cols_);
-    const grid_cell o =
-        heading_[static_cast<std::size_t>(a)].field_offset[static_cast<std::size_t>(m)];
-    return dn.block(r.first_row + o.row, r.first_col + o.col, r.rows, r.cols);
+  // Field positions per band of `distances`: 64 tiles = 512 float positions, x 108 descriptors
+  // (3 patches x 36 headings) = 221 KB.
+  static constexpr Eigen::Index band_tiles = 64;
+
+  // Adds the distances of field positions [first, last) (band row p - first) to every layer:
+  // patch m of heading a at state x reads position x + o_{a,m}, for the states of its reach.
+  template <class Out>
+  void add_band(Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>& band, Eigen::Index first,
+                Eigen::Index last, Out& out) const {
+    const Eigen::Index fc = field_cols_;
+    const Eigen::Index plane = rows_ * cols_;
+    for (Eigen::Index a = 0; a < angles_; ++a) {
+      const heading_tables& h = heading_[static_cast<std::size_t>(a)];
+      if (params_.pairs == pairing::all_pairs) {
+        // sum_m sum_n D_n(x + o_m) = sum_m S(x + o_m) with S = sum_n D_n (kept in column 0).
+        const detail::position_range& u = needed_[static_cast<std::size_t>(a * m_count_)];
+        const Eigen::Index lo = std::max(u.begin, first);
+        const Eigen::Index hi = std::min(u.end, last);
+        for (Eigen::Index n = 1; n < m_count_ && hi > lo; ++n)
+          band.col(a * m_count_).segment(lo - first, hi - lo) +=
+              band.col(a * m_count_ + n).segment(lo - first, hi - lo);
+      }
+      scalar_type* layer = out.data() + a * plane;
+      for (Eigen::Index m = 0; m < m_count_; ++m) {
+        const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
+        if (r.rows <= 0 || r.cols <= 0) continue;
+        const grid_cell o = h.field_offset[static_cast<std::size_t>(m)];
+        const scalar_type* d =
+            &band(0, a * m_count_ + (params_.pairs == pairing::all_pairs ? 0 : m));
+        // Field rows of this band that the reach reads, and its columns.
+        const Eigen::Index row_lo = std::max(first / fc, r.first_row + o.row);
+        const Eigen::Index row_hi = std::min((last - 1) / fc + 1, r.first_row + r.rows + o.row);
+        const Eigen::Index col_lo = r.first_col + o.col;
+        const Eigen::Index col_hi = col_lo + r.cols;
+        double total = 0.0;
+        for (Eigen::Index fr = row_lo; fr < row_hi; ++fr) {
+          const Eigen::Index c0 = std::max(col_lo, first - fr * fc);
+          const Eigen::Index c1 = std::min(col_hi, last - fr * fc);
+          if (c1 <= c0) continue;
+          using row_map = Eigen::Map<Eigen::Array<scalar_type, Eigen::Dynamic, 1>>;
+          const Eigen::Map<const Eigen::Array<scalar_type, Eigen::Dynamic, 1>> src(
+              d + fr * fc + c0 - first, c1 - c0);
+          row_map(layer + (fr - o.row) * cols_ + (c0 - o.col), c1 - c0) += src;
+          total += static_cast<double>(src.sum());  // in L1 now
+        }
+        sums_[static_cast<std::size_t>(a * m_count_ + m)] += total;
+      }
+    }
   }
 
   void render(const image<scalar_type>& z, const heading_tables& t,
@@ -429,11 +469,13 @@ class rotated_descriptor_likelihood {
   detail::descriptor_tiles<scalar_type> field_tiles_;
   std::vector<heading_tables> heading_;
   std::vector<detail::position_range> needed_;  // per tactile descriptor (a * M + m)
-  // Per-touch distances (positions x M * angles), kept between calls: not reentrant, like
+  // Per-touch distances of one band (positions x M * angles), kept between calls: not
+  // reentrant, like
   // descriptor_likelihood. One filter per thread.
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> workspace_;
   mutable typename descriptor_workspace<Descriptor>::type scratch_;  // the descriptor's scratch
   mutable image<scalar_type> canvas_;      // the tactile image turned to one heading
+  mutable std::vector<double> sums_;       // per tactile descriptor: its distances' sum
 };
 
 }  // namespace tacmap

@@ -224,7 +224,7 @@ namespace distance_kernel {
 // and 2.1 -> 3.2 ms (36 headings).
 template <std::size_t Tiles, std::size_t Count, class T>
 void block_each(const descriptor_tiles<T>& f, Eigen::Index t0, const T* g, Eigen::Index g_stride,
-                T* out, Eigen::Index out_stride) {
+                T* out, Eigen::Index out_stride, Eigen::Index origin) {
   using batch = xsimd::batch<T>;
   constexpr Eigen::Index width = descriptor_tiles<T>::width;
   const Eigen::Index dim = f.dimension();
@@ -249,8 +249,8 @@ void block_each(const descriptor_tiles<T>& f, Eigen::Index t0, const T* g, Eigen
   for (std::size_t i = 0; i < Tiles; ++i) {
     const Eigen::Index first = (t0 + static_cast<Eigen::Index>(i)) * width;
     for (std::size_t j = 0; j < Count; ++j)
-      store_tile(xsimd::sqrt(acc[i][j]), out + static_cast<Eigen::Index>(j) * out_stride, first,
-                 f.positions(), false);
+      store_tile(xsimd::sqrt(acc[i][j]), out + static_cast<Eigen::Index>(j) * out_stride,
+                 first - origin, f.positions() - origin, false);
   }
 }
 
@@ -268,7 +268,7 @@ inline bool needed(const position_range* ranges, Eigen::Index j, Eigen::Index n,
 template <std::size_t Tiles, class T>
 void each_descriptor(const descriptor_tiles<T>& f, Eigen::Index t0,
                      const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, T* out,
-                     Eigen::Index out_stride, const position_range* ranges) {
+                     Eigen::Index out_stride, const position_range* ranges, Eigen::Index origin) {
   constexpr Eigen::Index width = descriptor_tiles<T>::width;
   constexpr auto tiles = static_cast<Eigen::Index>(Tiles);
   const Eigen::Index stride = g.rows();
@@ -278,13 +278,19 @@ void each_descriptor(const descriptor_tiles<T>& f, Eigen::Index t0,
   Eigen::Index j = 0;
   for (; j + 3 <= count; j += 3, gj += 3 * stride, oj += 3 * out_stride)
     if (needed(ranges, j, 3, t0, tiles, width))
-      block_each<Tiles, 3>(f, t0, gj, stride, oj, out_stride);
+      block_each<Tiles, 3>(f, t0, gj, stride, oj, out_stride, origin);
   for (; j < count; ++j, gj += stride, oj += out_stride)
     if (needed(ranges, j, 1, t0, tiles, width))
-      block_each<Tiles, 1>(f, t0, gj, stride, oj, out_stride);
+      block_each<Tiles, 1>(f, t0, gj, stride, oj, out_stride, origin);
 }
 
 }  // namespace distance_kernel
+
+/// Tiles [begin, end) of a `descriptor_tiles` (end < 0: to the last tile).
+struct tile_range {
+  Eigen::Index begin = 0;
+  Eigen::Index end = -1;
+};
 
 /// out[j * out_stride + q] = || F(q) - g.col(j) || for every descriptor j and position q: many
 /// tactile descriptors (e.g. 3 patches x 36 headings) against the map's field in ONE pass over
@@ -294,16 +300,24 @@ void each_descriptor(const descriptor_tiles<T>& f, Eigen::Index t0,
 /// ranges[j] are needed for descriptor j; whole blocks of tiles outside every range of a group of
 /// descriptors are skipped (their outputs are left as they were) — a turned patch near the
 /// map's edge never reads some rows of the field.
+///
+/// `tiles`: only the positions of these tiles, written relative to the first of them
+/// (out[j * out_stride + q - tiles.begin * width], out_stride >= their positions): a band of
+/// the field whose outputs stay in cache for what the caller does with them next.
 template <class T>
 void distances_each(const descriptor_tiles<T>& f,
                     const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, T* out,
-                    Eigen::Index out_stride, const position_range* ranges = nullptr) {
+                    Eigen::Index out_stride, const position_range* ranges = nullptr,
+                    tile_range tiles = {}) {
   constexpr Eigen::Index width = descriptor_tiles<T>::width;
-  const Eigen::Index count = (f.positions() + width - 1) / width;
-  Eigen::Index t = 0;
+  const Eigen::Index all = (f.positions() + width - 1) / width;
+  const Eigen::Index count = tiles.end < 0 ? all : std::min(tiles.end, all);
+  const Eigen::Index origin = tiles.begin * width;
+  Eigen::Index t = tiles.begin;
   for (; t + 3 <= count; t += 3)
-    distance_kernel::each_descriptor<3>(f, t, g, out, out_stride, ranges);
-  for (; t < count; ++t) distance_kernel::each_descriptor<1>(f, t, g, out, out_stride, ranges);
+    distance_kernel::each_descriptor<3>(f, t, g, out, out_stride, ranges, origin);
+  for (; t < count; ++t)
+    distance_kernel::each_descriptor<1>(f, t, g, out, out_stride, ranges, origin);
 }
 
 }  // namespace tacmap::detail
