@@ -45,3 +45,19 @@ TEST_CASE_TEMPLATE("accumulate_distances matches its scalar reference", T, float
     }
   }
 }
+
+TEST_CASE("accumulate_distances: a near match is as exact as from differences") {
+  // ||F||^2 + ||g||^2 - 2 F.g cancels near a match; the kernel recomputes such lanes.
+  std::mt19937 rng(5);
+  Eigen::ArrayXXf f(32, 40);
+  for (float& v : f.reshaped()) v = static_cast<float>(rng() % 1000) / 1000.0F;
+  Eigen::ArrayXXf g(32, 3);
+  for (Eigen::Index j = 0; j < 3; ++j) {
+    g.col(j) = f.col(20);
+    g(j, j) += 2e-4F;
+  }
+  const tacmap::detail::descriptor_tiles<float> tiles(f);
+  Eigen::ArrayXf out(40);
+  tacmap::detail::accumulate_distances(tiles, g, 0, 3, out.data(), false);
+  CHECK(out(20) == doctest::Approx(6e-4).epsilon(1e-2));
+}

@@ -106,3 +106,31 @@ TEST_CASE("distances_each with position ranges computes what each descriptor nee
   // Group 1 (needs 60..99): the first positions untouched.
   CHECK(part(0, 3) == -1.0F);
 }
+
+TEST_CASE("distances_each: near matches are as exact as from differences; a band of tiles") {
+  // The kernel expands ||F - g||^2 = ||F||^2 + ||g||^2 - 2 F.g, which cancels near a match:
+  // there it must fall back to differences (a 1e-4 perturbation would otherwise come out as
+  // float noise of about 1e-3 or as 0).
+  std::mt19937 rng(4);
+  const Eigen::Index positions = 100;
+  Eigen::ArrayXXf f(32, positions);
+  for (float& v : f.reshaped()) v = static_cast<float>(rng() % 1000) / 1000.0F;
+  Eigen::ArrayXXf g(32, 4);
+  for (Eigen::Index j = 0; j < 4; ++j) {
+    g.col(j) = f.col(10 + 17 * j);
+    g(static_cast<Eigen::Index>(j * 5), j) += 1e-4F * static_cast<float>(j + 1);
+  }
+  const tacmap::detail::descriptor_tiles<float> tiles(f);
+  Eigen::ArrayXXf out(positions, 4);
+  tacmap::detail::distances_each(tiles, g, out.data(), positions);
+  for (Eigen::Index j = 0; j < 4; ++j) {
+    CAPTURE(j);
+    CHECK(out(10 + 17 * j, j) == doctest::Approx(1e-4 * static_cast<double>(j + 1)).epsilon(1e-2));
+  }
+  // Tiles [3, 7) only, written from out[0]: the same numbers as the whole pass.
+  constexpr Eigen::Index width = tacmap::detail::descriptor_tiles<float>::width;
+  Eigen::ArrayXXf band = Eigen::ArrayXXf::Constant(4 * width, 4, -1.0F);
+  tacmap::detail::distances_each(tiles, g, band.data(), band.rows(), nullptr, {3, 7});
+  for (Eigen::Index j = 0; j < 4; ++j)
+    CHECK((band.col(j) == out.col(j).segment(3 * width, 4 * width)).all());
+}

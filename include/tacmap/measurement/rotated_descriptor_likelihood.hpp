@@ -210,8 +210,7 @@ class rotated_descriptor_likelihood {
       const Eigen::Index first = t0 * width;
       const Eigen::Index last = std::min(t1 * width, positions);
       if constexpr (euclidean_descriptor<Descriptor>) {
-        detail::distances_each(field_tiles_, g, band.data(), band.rows(), needed_.data(),
-                               {t0, t1});
+        detail::distances_each(field_tiles_, g, band.data(), band.rows(), needed_.data(), {t0, t1});
       } else {  // a user's distance, called once per pair
         Eigen::Array<scalar_type, Eigen::Dynamic, 1> column(field_tiles_.dimension());
         for (Eigen::Index q = first; q < last; ++q) {
@@ -234,7 +233,8 @@ class rotated_descriptor_likelihood {
         const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
         if (r.rows <= 0 || r.cols <= 0) continue;  // never on the map: no information at all
         const double total = sums_[static_cast<std::size_t>(a * m_count_ + m)];
-        add_outside(layer, r, static_cast<scalar_type>(total / static_cast<double>(r.rows * r.cols)));
+        add_outside(layer, r,
+                    static_cast<scalar_type>(total / static_cast<double>(r.rows * r.cols)));
       }
     }
   }
@@ -474,8 +474,8 @@ class rotated_descriptor_likelihood {
   // descriptor_likelihood. One filter per thread.
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> workspace_;
   mutable typename descriptor_workspace<Descriptor>::type scratch_;  // the descriptor's scratch
-  mutable image<scalar_type> canvas_;      // the tactile image turned to one heading
-  mutable std::vector<double> sums_;       // per tactile descriptor: its distances' sum
+  mutable image<scalar_type> canvas_;  // the tactile image turned to one heading
+  mutable std::vector<double> sums_;   // per tactile descriptor: its distances' sum
 };
 
 }  // namespace tacmap
