@@ -321,14 +321,15 @@ void each_descriptor(const descriptor_tiles<T>& f, Eigen::Index t0,
   const Eigen::Index stride = g.rows();
   const Eigen::Index count = g.cols();
   const T* gj = g.data();
+  const T* nj = gn;
   T* oj = out;
   Eigen::Index j = 0;
-  for (; j + 3 <= count; j += 3, gj += 3 * stride, oj += 3 * out_stride)
+  for (; j + 3 <= count; j += 3, gj += 3 * stride, nj += 3, oj += 3 * out_stride)
     if (needed(ranges, j, 3, t0, tiles, width))
-      block_each<Tiles, 3>(f, t0, gj, stride, gn + j, oj, out_stride, origin);
-  for (; j < count; ++j, gj += stride, oj += out_stride)
+      block_each<Tiles, 3>(f, t0, gj, stride, nj, oj, out_stride, origin);
+  for (; j < count; ++j, gj += stride, ++nj, oj += out_stride)
     if (needed(ranges, j, 1, t0, tiles, width))
-      block_each<Tiles, 1>(f, t0, gj, stride, gn + j, oj, out_stride, origin);
+      block_each<Tiles, 1>(f, t0, gj, stride, nj, oj, out_stride, origin);
 }
 
 }  // namespace distance_kernel
