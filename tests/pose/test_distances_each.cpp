@@ -7,6 +7,16 @@
 
 #include "tacmap/measurement/detail/distance_kernel.hpp"
 
+namespace {
+// The descriptors' squared norms, as distances_each takes them.
+template <class T>
+std::vector<T> norms_of(const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g) {
+  std::vector<T> n;
+  tacmap::detail::squared_norms(g, n);
+  return n;
+}
+}  // namespace
+
 TEST_CASE_TEMPLATE("distances_each matches distances_each_scalar", T, float, double) {
   using array = Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>;
   constexpr Eigen::Index width = tacmap::detail::descriptor_tiles<T>::width;
@@ -36,7 +46,7 @@ TEST_CASE_TEMPLATE("distances_each matches distances_each_scalar", T, float, dou
         const T sentinel = T(-7);
         array fast = array::Constant(stride, count, sentinel);
         array ref = array::Constant(stride, count, sentinel);
-        tacmap::detail::distances_each(tiles, g, fast.data(), stride);
+        tacmap::detail::distances_each(tiles, g, norms_of(g).data(), fast.data(), stride);
         tacmap::detail::distances_each_scalar(tiles, g, ref.data(), stride);
         bool close = true;
         bool independent = true;
@@ -68,7 +78,7 @@ TEST_CASE("distances_each with an output stride equal to the positions fills a d
   for (float& v : g.reshaped()) v = static_cast<float>(rng() % 1000) / 1000.0F;
   const tacmap::detail::descriptor_tiles<float> tiles(f);
   Eigen::ArrayXXf out = Eigen::ArrayXXf::Constant(positions, 6, -1.0F);
-  tacmap::detail::distances_each(tiles, g, out.data(), positions);
+  tacmap::detail::distances_each(tiles, g, norms_of(g).data(), out.data(), positions);
   for (Eigen::Index j = 0; j < 6; ++j)
     for (Eigen::Index q = 0; q < positions; ++q)
       REQUIRE(out(q, j) == doctest::Approx(std::sqrt((f.col(q) - g.col(j)).square().sum())));
@@ -86,11 +96,12 @@ TEST_CASE("distances_each with position ranges computes what each descriptor nee
   for (float& v : g.reshaped()) v = static_cast<float>(rng() % 1000) / 1000.0F;
   const tacmap::detail::descriptor_tiles<float> tiles(f);
   Eigen::ArrayXXf full(positions, 7);
-  tacmap::detail::distances_each(tiles, g, full.data(), positions);
+  tacmap::detail::distances_each(tiles, g, norms_of(g).data(), full.data(), positions);
   const std::vector<tacmap::detail::position_range> ranges{{0, 10},   {5, 20},   {0, 0}, {60, 100},
                                                            {60, 100}, {60, 100}, {0, 0}};
   Eigen::ArrayXXf part = Eigen::ArrayXXf::Constant(positions, 7, -1.0F);
-  tacmap::detail::distances_each(tiles, g, part.data(), positions, ranges.data());
+  tacmap::detail::distances_each(tiles, g, norms_of(g).data(), part.data(), positions,
+                                 ranges.data());
   for (Eigen::Index j = 0; j < 7; ++j)
     for (Eigen::Index q = ranges[static_cast<std::size_t>(j)].begin;
          q < ranges[static_cast<std::size_t>(j)].end; ++q) {
@@ -122,7 +133,7 @@ TEST_CASE("distances_each: near matches are as exact as from differences; a band
   }
   const tacmap::detail::descriptor_tiles<float> tiles(f);
   Eigen::ArrayXXf out(positions, 4);
-  tacmap::detail::distances_each(tiles, g, out.data(), positions);
+  tacmap::detail::distances_each(tiles, g, norms_of(g).data(), out.data(), positions);
   for (Eigen::Index j = 0; j < 4; ++j) {
     CAPTURE(j);
     CHECK(out(10 + 17 * j, j) == doctest::Approx(1e-4 * static_cast<double>(j + 1)).epsilon(1e-2));
@@ -130,7 +141,8 @@ TEST_CASE("distances_each: near matches are as exact as from differences; a band
   // Tiles [3, 7) only, written from out[0]: the same numbers as the whole pass.
   constexpr Eigen::Index width = tacmap::detail::descriptor_tiles<float>::width;
   Eigen::ArrayXXf band = Eigen::ArrayXXf::Constant(4 * width, 4, -1.0F);
-  tacmap::detail::distances_each(tiles, g, band.data(), band.rows(), nullptr, {3, 7});
+  tacmap::detail::distances_each(tiles, g, norms_of(g).data(), band.data(), band.rows(), nullptr,
+                                 {3, 7});
   for (Eigen::Index j = 0; j < 4; ++j)
     CHECK((band.col(j) == out.col(j).segment(3 * width, 4 * width)).all());
 }

@@ -313,13 +313,15 @@ class descriptor_likelihood {
     // leading field_tiles_.positions() entries are computed and read (see the constructor).
     auto& dist = workspace_;
     dist.resize(positions, params_.pairs == pairing::all_pairs ? 1 : m_count);
-    if (params_.pairs == pairing::all_pairs)
+    if (params_.pairs == pairing::all_pairs) {
       accumulate(field_tiles_, g, 0, m_count, dist.data(), false);
-    else if constexpr (euclidean_descriptor<Descriptor>)
-      detail::distances_each(field_tiles_, g, dist.data(), positions);  // one pass, M outputs
-    else
+    } else if constexpr (euclidean_descriptor<Descriptor>) {
+      detail::squared_norms(g, g_norms_);  // one pass over the field, M outputs:
+      detail::distances_each(field_tiles_, g, g_norms_.data(), dist.data(), positions);
+    } else {
       for (Eigen::Index n = 0; n < m_count; ++n)
         accumulate(field_tiles_, g, n, 1, &dist(0, n), false);
+    }
     Eigen::Map<image<scalar_type>> d(out.data(), rows_, cols_);
     for (Eigen::Index m = 0; m < m_count; ++m) {
       // sum_m sum_n D_n(x + o_m) = sum_m S(x + o_m); aligned: sum_m D_m(x + o_m).
@@ -345,6 +347,7 @@ class descriptor_likelihood {
   // Per-touch distances, kept between calls so that log_likelihood() does not allocate. This
   // makes one model object non-reentrant: give each thread its own filter.
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> workspace_;
+  mutable std::vector<scalar_type> g_norms_;  // the tactile descriptors' squared norms
 };
 
 }  // namespace tacmap

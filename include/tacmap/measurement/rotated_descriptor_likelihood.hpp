@@ -199,20 +199,23 @@ class rotated_descriptor_likelihood {
     const Eigen::Index positions = field_rows_ * field_cols_;
     const Eigen::Index tiles = (positions + width - 1) / width;
     auto& band = workspace_;  // band position p - first x descriptor j
-    // Columns start on cache-line boundaries: the kernel's register-wide stores never straddle
-    // two lines.
-    band.resize(detail::cache_line_multiple<scalar_type>(band_tiles * width), g.cols());
+    // 512 positions: each column starts on a cache line, so the kernel's register-wide stores
+    // never straddle two lines.
+    band.resize(band_tiles * width, g.cols());
+    if constexpr (euclidean_descriptor<Descriptor>) detail::squared_norms(g, g_norms_);
     out.setZero();
     // Per patch m of heading a (a * M + m): the sum of its distances where it lands on the map.
     sums_.assign(static_cast<std::size_t>(m_count_ * angles_), 0.0);
+    Eigen::Array<scalar_type, Eigen::Dynamic, 1> column;  // a user's distance: one map patch
+    if constexpr (!euclidean_descriptor<Descriptor>) column.resize(field_tiles_.dimension());
     for (Eigen::Index t0 = 0; t0 < tiles; t0 += band_tiles) {
       const Eigen::Index t1 = std::min(t0 + band_tiles, tiles);
       const Eigen::Index first = t0 * width;
       const Eigen::Index last = std::min(t1 * width, positions);
       if constexpr (euclidean_descriptor<Descriptor>) {
-        detail::distances_each(field_tiles_, g, band.data(), band.rows(), needed_.data(), {t0, t1});
+        detail::distances_each(field_tiles_, g, g_norms_.data(), band.data(), band.rows(),
+                               needed_.data(), {t0, t1});
       } else {  // a user's distance, called once per pair
-        Eigen::Array<scalar_type, Eigen::Dynamic, 1> column(field_tiles_.dimension());
         for (Eigen::Index q = first; q < last; ++q) {
           for (Eigen::Index k = 0; k < field_tiles_.dimension(); ++k)
             column(k) = field_tiles_.at(q, k);
@@ -469,10 +472,11 @@ class rotated_descriptor_likelihood {
   detail::descriptor_tiles<scalar_type> field_tiles_;
   std::vector<heading_tables> heading_;
   std::vector<detail::position_range> needed_;  // per tactile descriptor (a * M + m)
-  // Per-touch distances of one band (positions x M * angles), kept between calls: not
-  // reentrant, like
-  // descriptor_likelihood. One filter per thread.
+  // Per-touch distances of one band (positions x M * angles) and the tactile descriptors'
+  // squared norms, kept between calls: not reentrant, like descriptor_likelihood. One filter
+  // per thread.
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> workspace_;
+  mutable std::vector<scalar_type> g_norms_;
   mutable typename descriptor_workspace<Descriptor>::type scratch_;  // the descriptor's scratch
   mutable image<scalar_type> canvas_;  // the tactile image turned to one heading
   mutable std::vector<double> sums_;   // per tactile descriptor: its distances' sum
