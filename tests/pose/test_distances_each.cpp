@@ -146,3 +146,52 @@ TEST_CASE("distances_each: near matches are as exact as from differences; a band
   for (Eigen::Index j = 0; j < 4; ++j)
     CHECK((band.col(j) == out.col(j).segment(3 * width, 4 * width)).all());
 }
+
+TEST_CASE("distances_each in groups: each column is the sum of its group's distances") {
+  // Groups of 1..5 descriptors (blocks of 3 inside a group, and the rest one by one), with and
+  // without position ranges and a band of tiles: column c must equal the sum over descriptors
+  // [c g, (c + 1) g) of the per-descriptor distances.
+  std::mt19937 rng(12);
+  const Eigen::Index positions = 77;
+  constexpr Eigen::Index width = tacmap::detail::descriptor_tiles<float>::width;
+  Eigen::ArrayXXf f(32, positions);
+  for (float& v : f.reshaped()) v = static_cast<float>(rng() % 1000) / 1000.0F;
+  const tacmap::detail::descriptor_tiles<float> tiles(f);
+  for (const Eigen::Index group : {2, 3, 4, 5}) {
+    CAPTURE(group);
+    const Eigen::Index groups = 3;
+    Eigen::ArrayXXf g(32, group * groups);
+    for (float& v : g.reshaped()) v = static_cast<float>(rng() % 1000) / 1000.0F;
+    g.col(1) = f.col(40);  // an exact match inside a group still contributes exactly 0
+    Eigen::ArrayXXf each(positions, g.cols());
+    tacmap::detail::distances_each_scalar(tiles, g, each.data(), positions);
+    Eigen::ArrayXXf want = Eigen::ArrayXXf::Zero(positions, groups);
+    for (Eigen::Index j = 0; j < g.cols(); ++j) want.col(j / group) += each.col(j);
+
+    Eigen::ArrayXXf got = Eigen::ArrayXXf::Constant(positions, groups, -1.0F);
+    tacmap::detail::distances_each(tiles, g, norms_of(g).data(), got.data(), positions, nullptr, {},
+                                   group);
+    CHECK(((got - want).abs() <= 1e-5F * (1.0F + want.abs())).all());
+
+    // Ranges: group 1 needs nothing (left untouched), group 2 only positions 50..76.
+    std::vector<tacmap::detail::position_range> ranges(static_cast<std::size_t>(g.cols()),
+                                                       {0, positions});
+    for (Eigen::Index j = group; j < 2 * group; ++j) ranges[static_cast<std::size_t>(j)] = {0, 0};
+    for (Eigen::Index j = 2 * group; j < 3 * group; ++j)
+      ranges[static_cast<std::size_t>(j)] = {50, positions};
+    Eigen::ArrayXXf part = Eigen::ArrayXXf::Constant(positions, groups, -1.0F);
+    tacmap::detail::distances_each(tiles, g, norms_of(g).data(), part.data(), positions,
+                                   ranges.data(), {}, group);
+    CHECK((part.col(0) == got.col(0)).all());
+    CHECK((part.col(1) == -1.0F).all());
+    CHECK((part.col(2).tail(positions - 50) == got.col(2).tail(positions - 50)).all());
+    CHECK(part(0, 2) == -1.0F);
+
+    // A band of tiles [2, 5), written from row 0.
+    Eigen::ArrayXXf band = Eigen::ArrayXXf::Constant(3 * width, groups, -1.0F);
+    tacmap::detail::distances_each(tiles, g, norms_of(g).data(), band.data(), band.rows(), nullptr,
+                                   {2, 5}, group);
+    for (Eigen::Index c = 0; c < groups; ++c)
+      CHECK((band.col(c) == got.col(c).segment(2 * width, 3 * width)).all());
+  }
+}

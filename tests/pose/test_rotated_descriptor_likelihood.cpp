@@ -322,6 +322,39 @@ TEST_CASE("rotated likelihood: with one heading it ranks positions as the shared
   CHECK(worst_correlation > 0.85);
 }
 
+namespace {
+// SIFT-lite without the Euclidean opt-in: the model then calls distance() once per pair (a
+// user's own distance) instead of the vectorised kernel.
+struct sift_lite_generic : sift_lite {
+  static constexpr bool euclidean_distance = false;
+};
+}  // namespace
+static_assert(!tacmap::euclidean_descriptor<sift_lite_generic>);
+static_assert(tacmap::euclidean_descriptor<sift_lite>);
+
+TEST_CASE("rotated likelihood: a user's distance gives what the vectorised kernel gives") {
+  // Both pairings, 5 headings (3-descriptor blocks that straddle patches and headings), a pose
+  // near the edge (patches off the map at some headings).
+  const auto g = grid64(5);
+  const auto z = pose_test::render_state(map64(), g, g.index(2, {3, 40}));
+  for (const auto pairs : {tacmap::pairing::aligned, tacmap::pairing::all_pairs}) {
+    CAPTURE(static_cast<int>(pairs));
+    const rotated_descriptor_likelihood<sift_lite> fast(sift_lite{}, map64(), g, {.pairs = pairs});
+    const rotated_descriptor_likelihood<sift_lite_generic> generic(sift_lite_generic{}, map64(), g,
+                                                                   {.pairs = pairs});
+    Eigen::ArrayXf a(g.size());
+    Eigen::ArrayXf b(g.size());
+    fast.distances(g, z, a);
+    generic.distances(g, z, b);
+    CHECK(a.isFinite().all());
+    CHECK(((a - b).abs() <= 1e-4F * (1.0F + b.abs())).all());
+    // Twice in a row (the workspaces are reused): the same numbers.
+    Eigen::ArrayXf again(g.size());
+    fast.distances(g, z, again);
+    CHECK((again == a).all());
+  }
+}
+
 TEST_CASE("rotated likelihood: bad input is rejected with a clear message") {
   const auto& model = model64(4);
   const auto g = grid64(4);

@@ -194,14 +194,29 @@ class rotated_descriptor_likelihood {
   void distances(const G& grid, const measurement_type& z, belief_array<G>& out)
       const requires std::same_as<typename G::scalar_type, scalar_type> {
     check_grid(grid);
-    const auto g = tactile_descriptors(z);
+    const bool summed = params_.pairs == pairing::all_pairs;
+    // Aligned: the descriptors patch by patch (column m A + a; see build_needed).
+    auto& g = tactile_;
+    g = tactile_descriptors(z);
+    if (!summed) {
+      auto& by_patch = by_patch_;
+      by_patch.resize(g.rows(), g.cols());
+      for (Eigen::Index a = 0; a < angles_; ++a)
+        for (Eigen::Index m = 0; m < m_count_; ++m)
+          by_patch.col(m * angles_ + a) = g.col(a * m_count_ + m);
+      g.swap(by_patch);
+    }
     constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
     const Eigen::Index positions = field_rows_ * field_cols_;
     const Eigen::Index tiles = (positions + width - 1) / width;
-    auto& band = workspace_;  // band position p - first x descriptor j
+    // All pairs: a heading's layer needs only the sum over its M tactile descriptors
+    // (sum_m sum_n D_n(x + o_m) = sum_m S(x + o_m), S = sum_n D_n), so the band keeps one
+    // column per heading, summed as it is computed; aligned: one column per descriptor.
+    const Eigen::Index group = summed ? m_count_ : 1;
+    auto& band = workspace_;  // band position p - first x column (descriptor j, or heading a)
     // 512 positions: each column starts on a cache line, so the kernel's register-wide stores
     // never straddle two lines.
-    band.resize(band_tiles * width, g.cols());
+    band.resize(band_tiles * width, g.cols() / group);
     if constexpr (euclidean_descriptor<Descriptor>) detail::squared_norms(g, g_norms_);
     out.setZero();
     // Per patch m of heading a (a * M + m): the sum of its distances where it lands on the map.
@@ -214,13 +229,14 @@ class rotated_descriptor_likelihood {
       const Eigen::Index last = std::min(t1 * width, positions);
       if constexpr (euclidean_descriptor<Descriptor>) {
         detail::distances_each(field_tiles_, g, g_norms_.data(), band.data(), band.rows(),
-                               needed_.data(), {t0, t1});
+                               needed_.data(), {t0, t1}, group);
       } else {  // a user's distance, called once per pair
+        band.topRows(last - first).setZero();
         for (Eigen::Index q = first; q < last; ++q) {
           for (Eigen::Index k = 0; k < field_tiles_.dimension(); ++k)
             column(k) = field_tiles_.at(q, k);
           for (Eigen::Index j = 0; j < g.cols(); ++j)
-            band(q - first, j) = descriptor_.distance(column, g.col(j));
+            band(q - first, j / group) += descriptor_.distance(column, g.col(j));
         }
       }
       add_band(band, first, last, out);
@@ -323,20 +339,6 @@ class rotated_descriptor_likelihood {
         r.cols = std::max<Eigen::Index>(0, std::min(cols_, field_cols_ - dc) - r.first_col);
         t.reach.push_back(r);
       }
-      // The dense-field positions this heading's patches read (whole field rows): the distance
-      // kernel skips the rest, and computes nothing for patches that never land on the map.
-      Eigen::Index row_lo = field_rows_;
-      Eigen::Index row_hi = 0;
-      for (std::size_t m = 0; m < t.reach.size(); ++m) {
-        const patch_reach& r = t.reach[m];
-        if (r.rows <= 0 || r.cols <= 0) continue;
-        row_lo = std::min(row_lo, r.first_row + t.field_offset[m].row);
-        row_hi = std::max(row_hi, r.first_row + t.field_offset[m].row + r.rows);
-      }
-      const detail::position_range used =
-          row_hi > row_lo ? detail::position_range{row_lo * field_cols_, row_hi * field_cols_}
-                          : detail::position_range{0, 0};
-      for (Eigen::Index m = 0; m < m_count_; ++m) needed_.push_back(used);
 
       // Canvas pixel centre -> offset from the sensor centre (map frame) -> sensor frame
       // R(-theta) -> tactile pixel coordinates, clamped to the image (edge pixels repeat).
@@ -365,6 +367,41 @@ class rotated_descriptor_likelihood {
                          static_cast<float>((1 - fx) * fy), static_cast<float>(fx * fy)};
         }
     }
+    build_needed();
+  }
+
+  // The dense-field positions (whole field rows) each column of the band needs: the distance
+  // kernel skips blocks of positions that no descriptor of a block of three needs, and computes
+  // nothing for patches that never land on the map. All pairs: a heading's sum S reads what
+  // any of its patches reads. Aligned: each descriptor only its own patch's rows, about 79 of
+  // the field's 103 for the paper's window on 120 px — and as its columns are ordered patch by
+  // patch (descriptor m A + a), a block of three holds one patch at three neighbouring headings,
+  // whose rows nearly coincide, so about a fifth of the kernel's work is skipped.
+  void build_needed() {
+    const auto rows_of = [this](const heading_tables& t, std::size_t m) {
+      const patch_reach& r = t.reach[m];
+      if (r.rows <= 0 || r.cols <= 0) return detail::position_range{0, 0};
+      const Eigen::Index lo = r.first_row + t.field_offset[m].row;
+      return detail::position_range{lo * field_cols_, (lo + r.rows) * field_cols_};
+    };
+    needed_.clear();
+    if (params_.pairs == pairing::all_pairs) {
+      for (const heading_tables& t : heading_) {
+        detail::position_range u{0, 0};
+        for (std::size_t m = 0; m < t.reach.size(); ++m) {
+          const detail::position_range r = rows_of(t, m);
+          if (r.end <= r.begin) continue;
+          u = u.end <= u.begin
+                  ? r
+                  : detail::position_range{std::min(u.begin, r.begin), std::max(u.end, r.end)};
+        }
+        for (Eigen::Index m = 0; m < m_count_; ++m) needed_.push_back(u);
+      }
+    } else {
+      for (Eigen::Index m = 0; m < m_count_; ++m)
+        for (const heading_tables& t : heading_)
+          needed_.push_back(rows_of(t, static_cast<std::size_t>(m)));
+    }
   }
 
   // layer += value at the states outside r's rectangle.
@@ -378,35 +415,26 @@ class rotated_descriptor_likelihood {
     if (right > 0) layer.block(r.first_row, r.first_col + r.cols, r.rows, right) += value;
   }
 
-  // Field positions per band of `distances`: 64 tiles = 512 float positions, x 108 descriptors
-  // (3 patches x 36 headings) = 221 KB.
+  // Field positions per band of `distances`: 64 tiles = 512 float positions, x 36 headings
+  // (all pairs: 74 KB) or x 108 descriptors (aligned, 3 patches x 36 headings: 221 KB).
   static constexpr Eigen::Index band_tiles = 64;
 
   // Adds the distances of field positions [first, last) (band row p - first) to every layer:
   // patch m of heading a at state x reads position x + o_{a,m}, for the states of its reach.
   template <class Out>
-  void add_band(Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>& band, Eigen::Index first,
-                Eigen::Index last, Out& out) const {
+  void add_band(const Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>& band,
+                Eigen::Index first, Eigen::Index last, Out& out) const {
     const Eigen::Index fc = field_cols_;
     const Eigen::Index plane = rows_ * cols_;
     for (Eigen::Index a = 0; a < angles_; ++a) {
       const heading_tables& h = heading_[static_cast<std::size_t>(a)];
-      if (params_.pairs == pairing::all_pairs) {
-        // sum_m sum_n D_n(x + o_m) = sum_m S(x + o_m) with S = sum_n D_n (kept in column 0).
-        const detail::position_range& u = needed_[static_cast<std::size_t>(a * m_count_)];
-        const Eigen::Index lo = std::max(u.begin, first);
-        const Eigen::Index hi = std::min(u.end, last);
-        for (Eigen::Index n = 1; n < m_count_ && hi > lo; ++n)
-          band.col(a * m_count_).segment(lo - first, hi - lo) +=
-              band.col(a * m_count_ + n).segment(lo - first, hi - lo);
-      }
       scalar_type* layer = out.data() + a * plane;
       for (Eigen::Index m = 0; m < m_count_; ++m) {
         const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
         if (r.rows <= 0 || r.cols <= 0) continue;
         const grid_cell o = h.field_offset[static_cast<std::size_t>(m)];
-        const scalar_type* d =
-            &band(0, a * m_count_ + (params_.pairs == pairing::all_pairs ? 0 : m));
+        // All pairs: heading a's column holds S = sum_n D_n; aligned: D_m in column m A + a.
+        const scalar_type* d = &band(0, params_.pairs == pairing::all_pairs ? a : m * angles_ + a);
         // Field rows of this band that the reach reads, and its columns.
         const Eigen::Index row_lo = std::max(first / fc, r.first_row + o.row);
         const Eigen::Index row_hi = std::min((last - 1) / fc + 1, r.first_row + r.rows + o.row);
@@ -471,12 +499,14 @@ class rotated_descriptor_likelihood {
   Eigen::Index canvas_cols_ = 0;
   detail::descriptor_tiles<scalar_type> field_tiles_;
   std::vector<heading_tables> heading_;
-  std::vector<detail::position_range> needed_;  // per tactile descriptor (a * M + m)
+  std::vector<detail::position_range> needed_;  // per band column's descriptor (build_needed)
   // Per-touch distances of one band (positions x M * angles) and the tactile descriptors'
   // squared norms, kept between calls: not reentrant, like descriptor_likelihood. One filter
   // per thread.
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> workspace_;
   mutable std::vector<scalar_type> g_norms_;
+  mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> tactile_;   // g, kernel order
+  mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> by_patch_;  // reordering
   mutable typename descriptor_workspace<Descriptor>::type scratch_;  // the descriptor's scratch
   mutable image<scalar_type> canvas_;  // the tactile image turned to one heading
   mutable std::vector<double> sums_;   // per tactile descriptor: its distances' sum

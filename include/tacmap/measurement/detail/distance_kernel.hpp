@@ -17,6 +17,8 @@
 #include <vector>
 #include <xsimd/xsimd.hpp>
 
+#include "tacmap/config.hpp"
+
 namespace tacmap::detail {
 
 /// Descriptors of `positions` positions, tiled for `accumulate_distances`.
@@ -260,12 +262,15 @@ namespace distance_kernel {
 // Tiles x Count accumulators as in `block` (the same expansion, the same fallback from
 // differences near a match), but each descriptor's distances go to their own output column
 // (stored, not summed), and the descriptors are broadcast on the fly (108 of them do not fit L1
-// pre-broadcast); `gn` their squared norms. It stays a second loop: one shared function filling
-// the accumulators through a reference measured 51 -> 75 us (planar) and 2.1 -> 3.2 ms (36
-// headings).
-template <std::size_t Tiles, std::size_t Count, class T>
+// pre-broadcast); `gn` their squared norms. `Sum`: the Count distances are summed in registers
+// into ONE column instead (stored, or added when `add`): a group of descriptors whose caller
+// only wants their sum (all pairs of one heading) never writes the single distances. It stays
+// a second loop: one shared function filling the accumulators through a reference measured
+// 51 -> 75 us (planar) and 2.1 -> 3.2 ms (36 headings).
+template <std::size_t Tiles, std::size_t Count, bool Sum, class T>
 void block_each(const descriptor_tiles<T>& f, Eigen::Index t0, const T* g, Eigen::Index g_stride,
-                const T* gn, T* out, Eigen::Index out_stride, Eigen::Index origin) {
+                const T* gn, T* out, Eigen::Index out_stride, Eigen::Index origin,
+                bool add = false) {
   using batch = xsimd::batch<T>;
   constexpr Eigen::Index width = descriptor_tiles<T>::width;
   const Eigen::Index dim = f.dimension();
@@ -288,13 +293,18 @@ void block_each(const descriptor_tiles<T>& f, Eigen::Index t0, const T* g, Eigen
     const Eigen::Index first = (t0 + static_cast<Eigen::Index>(i)) * width;
     const batch nf = batch::load_aligned(f.squared_norms(t0 + static_cast<Eigen::Index>(i)));
     const T* ti = tile + static_cast<Eigen::Index>(i) * tile_stride;
+    batch total(T(0));
     for (std::size_t j = 0; j < Count; ++j) {
       const T* gj = g + static_cast<Eigen::Index>(j) * g_stride;
-      const batch d2 = squared_distance(acc[i][j], nf, gn[j], ti, dim,
-                                        [gj](Eigen::Index k) { return batch(gj[k]); });
-      store_tile(xsimd::sqrt(d2), out + static_cast<Eigen::Index>(j) * out_stride, first - origin,
-                 f.positions() - origin, false);
+      const batch d = xsimd::sqrt(squared_distance(acc[i][j], nf, gn[j], ti, dim,
+                                                   [gj](Eigen::Index k) { return batch(gj[k]); }));
+      if constexpr (Sum)
+        total += d;
+      else
+        store_tile(d, out + static_cast<Eigen::Index>(j) * out_stride, first - origin,
+                   f.positions() - origin, false);
     }
+    if constexpr (Sum) store_tile(total, out, first - origin, f.positions() - origin, add);
   }
 }
 
@@ -323,10 +333,34 @@ void each_descriptor(const descriptor_tiles<T>& f, Eigen::Index t0,
   Eigen::Index j = 0;
   for (; j + 3 <= count; j += 3, gj += 3 * stride, nj += 3, oj += 3 * out_stride)
     if (needed(ranges, j, 3, t0, tiles, width))
-      block_each<Tiles, 3>(f, t0, gj, stride, nj, oj, out_stride, origin);
+      block_each<Tiles, 3, false>(f, t0, gj, stride, nj, oj, out_stride, origin);
   for (; j < count; ++j, gj += stride, ++nj, oj += out_stride)
     if (needed(ranges, j, 1, t0, tiles, width))
-      block_each<Tiles, 1>(f, t0, gj, stride, nj, oj, out_stride, origin);
+      block_each<Tiles, 1, false>(f, t0, gj, stride, nj, oj, out_stride, origin);
+}
+
+// Groups of `group` consecutive descriptors, each group's distances summed into one column.
+template <std::size_t Tiles, class T>
+void each_group(const descriptor_tiles<T>& f, Eigen::Index t0,
+                const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, const T* gn,
+                Eigen::Index group, T* out, Eigen::Index out_stride, const position_range* ranges,
+                Eigen::Index origin) {
+  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+  constexpr auto tiles = static_cast<Eigen::Index>(Tiles);
+  const Eigen::Index stride = g.rows();
+  const Eigen::Index groups = g.cols() / group;
+  for (Eigen::Index c = 0; c < groups; ++c) {
+    const Eigen::Index j0 = c * group;
+    if (!needed(ranges, j0, group, t0, tiles, width)) continue;
+    T* oc = out + c * out_stride;
+    Eigen::Index j = j0;
+    for (; j + 3 <= j0 + group; j += 3)
+      block_each<Tiles, 3, true>(f, t0, g.data() + j * stride, stride, gn + j, oc, out_stride,
+                                 origin, j > j0);
+    for (; j < j0 + group; ++j)
+      block_each<Tiles, 1, true>(f, t0, g.data() + j * stride, stride, gn + j, oc, out_stride,
+                                 origin, j > j0);
+  }
 }
 
 }  // namespace distance_kernel
@@ -358,16 +392,28 @@ void squared_norms(const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, std
 /// `tiles`: only the positions of these tiles, written relative to the first of them
 /// (out[j * out_stride + q - tiles.begin * width], out_stride >= their positions): a band of
 /// the field whose outputs stay in cache for what the caller does with them next.
+///
+/// `group` > 1: column c of `out` receives the SUM over descriptors [c * group, (c + 1) * group)
+/// instead (g.cols() must be a multiple of group) — what the all-pairs measurement wants per
+/// heading, without writing and re-reading the single distances.
 template <class T>
 void distances_each(const descriptor_tiles<T>& f,
                     const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, const T* g_norms,
                     T* out, Eigen::Index out_stride, const position_range* ranges = nullptr,
-                    tile_range tiles = {}) {
+                    tile_range tiles = {}, Eigen::Index group = 1) {
   constexpr Eigen::Index width = descriptor_tiles<T>::width;
   const Eigen::Index all = (f.positions() + width - 1) / width;
   const Eigen::Index count = tiles.end < 0 ? all : std::min(tiles.end, all);
   const Eigen::Index origin = tiles.begin * width;
   Eigen::Index t = tiles.begin;
+  if (group > 1) {
+    TACMAP_ASSERT(g.cols() % group == 0, "distances_each: descriptors not a multiple of group");
+    for (; t + 3 <= count; t += 3)
+      distance_kernel::each_group<3>(f, t, g, g_norms, group, out, out_stride, ranges, origin);
+    for (; t < count; ++t)
+      distance_kernel::each_group<1>(f, t, g, g_norms, group, out, out_stride, ranges, origin);
+    return;
+  }
   for (; t + 3 <= count; t += 3)
     distance_kernel::each_descriptor<3>(f, t, g, g_norms, out, out_stride, ranges, origin);
   for (; t < count; ++t)
