@@ -195,3 +195,28 @@ TEST_CASE("distances_each in groups: each column is the sum of its group's dista
       CHECK((band.col(c) == got.col(c).segment(2 * width, 3 * width)).all());
   }
 }
+
+TEST_CASE_TEMPLATE("add_row matches add_row_scalar", T, float, double) {
+  // Lengths around the SIMD width; unaligned starts (src + 1, dst + 3).
+  constexpr Eigen::Index width = tacmap::detail::descriptor_tiles<T>::width;
+  std::mt19937 rng(21);
+  for (const Eigen::Index n : {Eigen::Index{0}, Eigen::Index{1}, width - 1, width, width + 1,
+                               3 * width + 2, Eigen::Index{103}}) {
+    if (n < 0) continue;
+    CAPTURE(n);
+    std::vector<T> src(static_cast<std::size_t>(n + 1));
+    std::vector<T> dst(static_cast<std::size_t>(n + 4));
+    for (T& v : src) v = static_cast<T>(rng() % 1000) / T(100);
+    for (T& v : dst) v = static_cast<T>(rng() % 1000) / T(100);
+    std::vector<T> want = dst;
+    const T sum = tacmap::detail::add_row_scalar(src.data() + 1, want.data() + 3, n);
+    xsimd::batch<T> acc(T(5));  // accumulates on top of what it holds
+    const T tail = tacmap::detail::add_row(src.data() + 1, dst.data() + 3, n, acc);
+    CHECK(dst == want);  // the same single additions, bit for bit
+    const double got = static_cast<double>(xsimd::hadd(acc)) - 5.0 * width + tail;
+    CHECK(got == doctest::Approx(static_cast<double>(sum)).epsilon(1e-5));
+    double direct = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) direct += static_cast<double>(src[std::size_t(i + 1)]);
+    CHECK(got == doctest::Approx(direct).epsilon(1e-5));
+  }
+}

@@ -371,6 +371,40 @@ struct tile_range {
   Eigen::Index end = -1;
 };
 
+/// dst[i] += src[i] for i in [0, n), and the sum of src: whole registers into `acc` (reduce it
+/// once after many rows), the last n % width values returned. The pose model's per-row step
+/// (a band's distances into a layer, and their sum for the off-map mean): ~10,000 rows of ~100
+/// values per touch, where Eigen's add-then-sum expression cost a second pass and its reduction's
+/// set-up per row.
+template <class T>
+T add_row(const T* src, T* dst, Eigen::Index n, xsimd::batch<T>& acc) {
+  using batch = xsimd::batch<T>;
+  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+  Eigen::Index i = 0;
+  for (; i + width <= n; i += width) {
+    const batch v = batch::load_unaligned(src + i);
+    (batch::load_unaligned(dst + i) + v).store_unaligned(dst + i);
+    acc += v;
+  }
+  T tail = 0;
+  for (; i < n; ++i) {
+    dst[i] += src[i];
+    tail += src[i];
+  }
+  return tail;
+}
+
+/// Plain reference of `add_row`: adds, and returns the whole sum.
+template <class T>
+T add_row_scalar(const T* src, T* dst, Eigen::Index n) {
+  T sum = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    dst[i] += src[i];
+    sum += src[i];
+  }
+  return sum;
+}
+
 /// ||g.col(j)||^2 for every column j (what `distances_each` takes with the descriptors), into
 /// `out` (resized; reusable between calls).
 template <class T>
