@@ -7,6 +7,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "blob_images.hpp"
@@ -155,6 +156,39 @@ TEST_CASE("describe_at keeps the list's order, repeats positions and ignores the
   }
   const auto at_grid = d.describe_at(img, grid);
   CHECK((at_grid - samples.values).abs().maxCoeff() <= 1e-5);
+}
+
+TEST_CASE_TEMPLATE("describe_at reusing one workspace equals compute, whatever it saw before", D,
+                   tacmap::sift_lite, tacmap::classic_sift) {
+  // One workspace through images of different sizes and contents, and positions that touch
+  // different pixels each time: what an earlier call left in it (channels outside this call's
+  // spans, margins kept zero for the same size, scratch rows) must never leak into the result.
+  using T = typename D::scalar_type;
+  const D d;
+  typename D::workspace scratch;
+  const std::vector<std::pair<Eigen::Index, Eigen::Index>> sizes = {{46, 46}, {46, 46}, {30, 52},
+                                                                    {46, 46}, {60, 40}, {46, 46}};
+  unsigned seed = 300U;
+  for (const auto& [rows, cols] : sizes) {
+    CAPTURE(rows);
+    CAPTURE(cols);
+    ++seed;
+    const image<T> img = test_image<T>(rows, cols, seed);
+    // A different few positions each call (the spans change with them).
+    std::vector<grid_cell> positions =
+        positions_for(rows - d.patch_size(), cols - d.patch_size(), seed + 50U);
+    positions.resize(3 + seed % 4);
+    const auto field = d.compute(img);
+    const auto got = d.describe_at(img, positions, scratch);
+    REQUIRE(got.cols() == static_cast<Eigen::Index>(positions.size()));
+    double worst = 0.0;
+    for (std::size_t i = 0; i < positions.size(); ++i)
+      worst = std::max(worst, static_cast<double>((got.col(static_cast<Eigen::Index>(i)) -
+                                                   field.at(positions[i].row, positions[i].col))
+                                                      .abs()
+                                                      .maxCoeff()));
+    CHECK(worst <= 1e-5);
+  }
 }
 
 TEST_CASE("describe_at of an empty list is dimension x 0; the image is still checked") {

@@ -263,10 +263,17 @@ struct column_span {
 /// over the span, widened to whole registers (the widened columns land in the next row or the
 /// scratch columns and are never read as results) so that short spans have no scalar tail.
 template <class T>
+struct span_gradient_scratch {
+  Eigen::Array<T, Eigen::Dynamic, 1> padded, dx, sx;
+  std::vector<column_span> out_span, pad_span;
+  std::vector<const T*> src;
+};
+
+template <class T>
 Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>& taps,
                        const std::vector<column_span>& spans,
                        Eigen::Array<T, Eigen::Dynamic, 1>& gx,
-                       Eigen::Array<T, Eigen::Dynamic, 1>& gy) {
+                       Eigen::Array<T, Eigen::Dynamic, 1>& gy, span_gradient_scratch<T>& scratch) {
   constexpr Eigen::Index lane = 32 / static_cast<Eigen::Index>(sizeof(T));
   const Eigen::Index h = img.rows();
   const Eigen::Index w = img.cols();
@@ -275,13 +282,15 @@ Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>
   const Eigen::Index wp = w + 2 * r;
   // A widened span reads at most lane - 1 + 2r past a row's last pixel.
   const Eigen::Index overrun = lane + 2 * r;
-  Eigen::Array<T, Eigen::Dynamic, 1> padded;
+  Eigen::Array<T, Eigen::Dynamic, 1>& padded = scratch.padded;
   padded_image(img, scale, r, overrun, padded);
 
   // Output row y's widened span, and each padded row's: the hull of the output rows it feeds
   // (padded row yp is tap yp - y of output row y, for yp - 2r <= y <= yp).
-  std::vector<column_span> out_span(static_cast<std::size_t>(h));
-  std::vector<column_span> pad_span(static_cast<std::size_t>(hp), {wp, 0});
+  std::vector<column_span>& out_span = scratch.out_span;
+  std::vector<column_span>& pad_span = scratch.pad_span;
+  out_span.assign(static_cast<std::size_t>(h), {});
+  pad_span.assign(static_cast<std::size_t>(hp), {wp, 0});
   for (Eigen::Index y = 0; y < h; ++y) {
     column_span sp = spans[static_cast<std::size_t>(y)];
     if (sp.begin >= sp.end) continue;
@@ -295,9 +304,12 @@ Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>
   }
 
   const auto n_taps = static_cast<std::size_t>(2 * r + 1);
-  std::vector<const T*> src(n_taps);
-  Eigen::Array<T, Eigen::Dynamic, 1> dx(hp * wp + overrun);
-  Eigen::Array<T, Eigen::Dynamic, 1> sx(hp * wp + overrun);
+  std::vector<const T*>& src = scratch.src;
+  src.resize(n_taps);
+  Eigen::Array<T, Eigen::Dynamic, 1>& dx = scratch.dx;
+  Eigen::Array<T, Eigen::Dynamic, 1>& sx = scratch.sx;
+  dx.resize(hp * wp + overrun);
+  sx.resize(hp * wp + overrun);
   for (Eigen::Index yp = 0; yp < hp; ++yp) {
     const column_span sp = pad_span[static_cast<std::size_t>(yp)];
     if (sp.begin >= sp.end) continue;
@@ -376,6 +388,8 @@ void orientation_channels_with(const Power& power, const Eigen::Array<T, Eigen::
 ///
 /// With `spans` (one per image row), only the pixels in row y's span are computed (the gradients
 /// need only be valid there); the others are left unspecified, the margins are still zero.
+/// `margins_zero`: `channels` already has this size and zero margins (a workspace reused for an
+/// image of the same size: nothing here writes the margins), so they are not cleared again.
 template <int NumAngles, class T>
 void orientation_channels(const Eigen::Array<T, Eigen::Dynamic, 1>& gx,
                           const Eigen::Array<T, Eigen::Dynamic, 1>& gy, Eigen::Index h,
@@ -383,16 +397,18 @@ void orientation_channels(const Eigen::Array<T, Eigen::Dynamic, 1>& gx,
                           const Eigen::Array<T, NumAngles, 1>& cos_a,
                           const Eigen::Array<T, NumAngles, 1>& sin_a, double alpha,
                           Eigen::Array<T, Eigen::Dynamic, 1>& channels,
-                          const column_span* spans = nullptr) {
+                          const column_span* spans = nullptr, bool margins_zero = false) {
   using array = Eigen::Array<T, Eigen::Dynamic, 1>;
   const Eigen::Index row_size = (w + 2 * margin) * NumAngles;
   channels.resize((h + 2 * margin) * row_size);
-  channels.head(margin * row_size).setZero();
-  channels.tail(margin * row_size).setZero();
-  for (Eigen::Index y = 0; y < h; ++y) {
-    T* row = channels.data() + (y + margin) * row_size;
-    Eigen::Map<array>(row, margin * NumAngles).setZero();
-    Eigen::Map<array>(row + (w + margin) * NumAngles, margin * NumAngles).setZero();
+  if (!margins_zero) {
+    channels.head(margin * row_size).setZero();
+    channels.tail(margin * row_size).setZero();
+    for (Eigen::Index y = 0; y < h; ++y) {
+      T* row = channels.data() + (y + margin) * row_size;
+      Eigen::Map<array>(row, margin * NumAngles).setZero();
+      Eigen::Map<array>(row + (w + margin) * NumAngles, margin * NumAngles).setZero();
+    }
   }
   // An integral alpha takes the squaring path (unrolled for alpha <= 16, the default 9
   // included); anything else uses pow.
