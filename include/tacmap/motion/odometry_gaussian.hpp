@@ -33,6 +33,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "tacmap/detail/weighted_sum.hpp"
 #include "tacmap/grid/concept.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/motion/concept.hpp"
@@ -237,7 +238,6 @@ class odometry_gaussian {
 
     const double inv_two_var = 0.5 / (sigma_px * sigma_px);
     const bool clamp = params_.boundary == off_grid::clamp;
-    const Eigen::Index n = in_img.size();
     if (separable_) {
       // Square stencils (k = 8: 3 x 3, k = 24: 5 x 5): the Gaussian and the bilinear kernel both
       // factor into x and y, so two 1-D passes of 2R + 2 taps replace (2R + 2)^2 2-D taps.
@@ -255,24 +255,8 @@ class odometry_gaussian {
       };
       const auto wx = taps(fx);
       const auto wy = taps(fy);
-      Eigen::Array<T, Eigen::Dynamic, 1>& tmp = workspace<T>();
-      tmp.resize(n);
-      Eigen::Map<image<T>> tmp_img(tmp.data(), in_img.rows(), in_img.cols());
-      tmp.setZero();
-      const Eigen::Map<const image<T>> tmp_in(tmp.data(), in_img.rows(), in_img.cols());
-      for (int t = 0; t < 2 * radius_ + 2; ++t) {
-        const double w = wx[static_cast<std::size_t>(t)];
-        if (w > 0.0)
-          detail::shifted_accumulate(in_img, tmp_img, 0, ix + t - radius_, static_cast<T>(w),
-                                     clamp);
-      }
-      out_img.setZero();
-      for (int t = 0; t < 2 * radius_ + 2; ++t) {
-        const double w = wy[static_cast<std::size_t>(t)];
-        if (w > 0.0)
-          detail::shifted_accumulate(tmp_in, out_img, iy + t - radius_, 0, static_cast<T>(w),
-                                     clamp);
-      }
+      separable_transport(in_img, out_img, ix - radius_, wx.data(), iy - radius_, wy.data(),
+                          2 * radius_ + 2, clamp);
     } else {
       // Any other disc: composite stencil = Gaussian (k + 1 taps) convolved with the bilinear
       // 2 x 2 kernel, applied as one whole-image multiply-add per tap.
@@ -304,23 +288,138 @@ class odometry_gaussian {
   }
 
  private:
-  // The separable path's intermediate image, kept between calls so that predict() does not
-  // allocate. This makes one model object non-reentrant: give each thread its own filter
-  // (models are small values and cheap to copy).
+  // The separable path's buffers, kept between calls so that predict() does not allocate. This
+  // makes one model object non-reentrant: give each thread its own filter (models are small
+  // values and cheap to copy).
   template <class T>
-  Eigen::Array<T, Eigen::Dynamic, 1>& workspace() const {
+  struct separable_scratch {
+    Eigen::Array<T, Eigen::Dynamic, 1> rows_padded;  // the input with zero rows above and below
+    Eigen::Array<T, Eigen::Dynamic, 1> cols_padded;  // the vertical pass, zero columns each side
+    Eigen::Array<T, Eigen::Dynamic, 1> prefix;       // running sums for clamp's edge piles
+    std::vector<const T*> sources;                   // per kept tap: its source at row 0
+    std::vector<const T*> row_sources;               // the same at the current row
+    std::vector<T> weights;
+  };
+  template <class T>
+  separable_scratch<T>& workspace() const {
     if constexpr (std::is_same_v<T, float>)
       return workspace_f_;
     else
       return workspace_d_;
   }
 
+  // out = the stencil's x taps (tap t moves mass by x0 + t columns, weight wx[t]) applied to the
+  // y taps (y0 + t rows, wy[t]) of `in`: the vertical pass into a buffer with zero columns on
+  // both sides, then the horizontal pass straight into `out`, each output written once as a
+  // weighted sum of its taps' sources (detail::weighted_sum) out of zero-padded copies — no
+  // per-tap pass over the whole image. Mass landing off the grid is dropped, or with `clamp`
+  // added to the edge row or column it crossed (from running sums). Taps that move every row
+  // (column) off the grid only matter for clamp.
+  template <class T>
+  void separable_transport(const Eigen::Map<const image<T>>& in, Eigen::Map<image<T>>& out,
+                           Eigen::Index x0, const double* wx, Eigen::Index y0, const double* wy,
+                           int taps, bool clamp) const {
+    const Eigen::Index h = in.rows();
+    const Eigen::Index w = in.cols();
+    separable_scratch<T>& s = workspace<T>();
+    // Padding: the largest shift of a tap that keeps some rows (columns) on the grid.
+    Eigen::Index pad_y = 0;
+    Eigen::Index pad_x = 0;
+    for (int t = 0; t < taps; ++t) {
+      const Eigen::Index sy = y0 + t;
+      const Eigen::Index sx = x0 + t;
+      if (wy[t] > 0.0 && std::abs(sy) < h) pad_y = std::max(pad_y, std::abs(sy));
+      if (wx[t] > 0.0 && std::abs(sx) < w) pad_x = std::max(pad_x, std::abs(sx));
+    }
+    // Vertical: row y of the result = sum_t wy[t] in(y - sy_t), rows outside the grid zero.
+    s.rows_padded.resize((h + 2 * pad_y) * w);
+    s.rows_padded.head(pad_y * w).setZero();
+    s.rows_padded.tail(pad_y * w).setZero();
+    Eigen::Map<image<T>>(s.rows_padded.data() + pad_y * w, h, w) = in;
+    const Eigen::Index wp = w + 2 * pad_x;
+    s.cols_padded.resize(h * wp);
+    Eigen::Map<image<T>> mid(s.cols_padded.data(), h, wp);
+    mid.leftCols(pad_x).setZero();
+    mid.rightCols(pad_x).setZero();
+    s.sources.clear();
+    s.weights.clear();
+    for (int t = 0; t < taps; ++t) {
+      const Eigen::Index sy = y0 + t;
+      if (!(wy[t] > 0.0) || std::abs(sy) >= h) continue;
+      s.sources.push_back(s.rows_padded.data() + (pad_y - sy) * w);
+      s.weights.push_back(static_cast<T>(wy[t]));
+    }
+    if (s.sources.empty()) {
+      mid.middleCols(pad_x, w).setZero();
+    } else {
+      // Row by row: each output row is written into `mid` between its zero columns.
+      std::vector<const T*>& row_sources = s.row_sources;
+      row_sources = s.sources;
+      for (Eigen::Index y = 0; y < h; ++y) {
+        for (std::size_t k = 0; k < row_sources.size(); ++k) row_sources[k] = s.sources[k] + y * w;
+        detail::weighted_sum(row_sources.data(), s.weights.data(), row_sources.size(),
+                             mid.data() + y * wp + pad_x, w);
+      }
+    }
+    if (clamp) {
+      // Rows that land above row 0 (below row h - 1) pile onto it: prefix(k) = sum of the first
+      // k rows of `in`, per column.
+      s.prefix.resize((h + 1) * w);
+      Eigen::Map<image<T>> prefix(s.prefix.data(), h + 1, w);
+      prefix.row(0).setZero();
+      for (Eigen::Index y = 0; y < h; ++y) prefix.row(y + 1) = prefix.row(y) + in.row(y);
+      for (int t = 0; t < taps; ++t) {
+        const Eigen::Index sy = y0 + t;
+        if (!(wy[t] > 0.0)) continue;
+        const auto wt = static_cast<T>(wy[t]);
+        const Eigen::Index above = std::clamp<Eigen::Index>(-sy, 0, h);  // rows j < -sy
+        const Eigen::Index below = std::clamp<Eigen::Index>(sy, 0, h);   // rows j >= h - sy
+        if (above > 0) mid.row(0).segment(pad_x, w) += wt * prefix.row(above);
+        if (below > 0)
+          mid.row(h - 1).segment(pad_x, w) += wt * (prefix.row(h) - prefix.row(h - below));
+      }
+    }
+    // Horizontal: out(y, x) = sum_t wx[t] mid(y, x - sx_t).
+    s.sources.clear();
+    s.weights.clear();
+    for (int t = 0; t < taps; ++t) {
+      const Eigen::Index sx = x0 + t;
+      if (!(wx[t] > 0.0) || std::abs(sx) >= w) continue;
+      s.sources.push_back(mid.data() + pad_x - sx);
+      s.weights.push_back(static_cast<T>(wx[t]));
+    }
+    std::vector<const T*>& row_sources = s.row_sources;
+    row_sources = s.sources;
+    for (Eigen::Index y = 0; y < h; ++y) {
+      if (s.sources.empty()) {
+        out.row(y).setZero();
+      } else {
+        for (std::size_t k = 0; k < row_sources.size(); ++k) row_sources[k] = s.sources[k] + y * wp;
+        detail::weighted_sum(row_sources.data(), s.weights.data(), row_sources.size(),
+                             out.data() + y * w, w);
+      }
+    }
+    if (clamp) {
+      // Columns that land left of column 0 (right of w - 1) pile onto it.
+      for (int t = 0; t < taps; ++t) {
+        const Eigen::Index sx = x0 + t;
+        if (!(wx[t] > 0.0)) continue;
+        const auto wt = static_cast<T>(wx[t]);
+        const Eigen::Index left = std::clamp<Eigen::Index>(-sx, 0, w);  // columns c < -sx
+        const Eigen::Index right = std::clamp<Eigen::Index>(sx, 0, w);  // columns c >= w - sx
+        if (left > 0) out.col(0) += wt * mid.middleCols(pad_x, left).rowwise().sum();
+        if (right > 0)
+          out.col(w - 1) += wt * mid.middleCols(pad_x + w - right, right).rowwise().sum();
+      }
+    }
+  }
+
   odometry_gaussian_params params_;
   std::vector<detail::stencil_offset> offsets_;
   int radius_ = 0;
   bool separable_ = false;
-  mutable Eigen::ArrayXf workspace_f_;
-  mutable Eigen::ArrayXd workspace_d_;
+  mutable separable_scratch<float> workspace_f_;
+  mutable separable_scratch<double> workspace_d_;
 };
 
 }  // namespace tacmap

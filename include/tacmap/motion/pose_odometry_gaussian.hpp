@@ -15,9 +15,9 @@
 #pragma once
 
 #include <cmath>
-#include <utility>
 #include <vector>
 
+#include "tacmap/detail/weighted_sum.hpp"
 #include "tacmap/grid/pose_grid.hpp"
 #include "tacmap/motion/odometry_gaussian.hpp"
 
@@ -139,26 +139,27 @@ class pose_odometry_gaussian {
       tap[static_cast<std::size_t>(wrap(j + base))] += g * (1.0 - frac);
       tap[static_cast<std::size_t>(wrap(j + base + 1))] += g * frac;
     }
-    // Output layer by output layer: layer b (one plane, in L1/L2) takes its few taps' source
-    // layers in turn, instead of every tap sweeping all of `out` (36 planes, 1.2 MB for the
-    // 120 px grid) once more.
-    std::vector<std::pair<Eigen::Index, T>> taps;  // (offset, weight), nonzero only
+    // Output layer by output layer, each written once as the weighted sum of its taps' source
+    // layers, instead of every tap sweeping all of `out` (36 planes, 1.2 MB for the 120 px
+    // grid) once more.
+    std::vector<Eigen::Index> offsets;  // nonzero taps only
+    std::vector<T> weights;
     for (Eigen::Index o = 0; o < layers; ++o) {
       const auto w = static_cast<T>(tap[static_cast<std::size_t>(o)]);
-      if (w > T(0)) taps.emplace_back(o, w);
-    }
-    for (Eigen::Index b = 0; b < layers; ++b) {
-      auto dst = out.segment(b * plane, plane);
-      bool first = true;
-      for (const auto& [o, w] : taps) {
-        const auto src = moved.segment(wrap(b - o) * plane, plane);
-        if (first)
-          dst = w * src;
-        else
-          dst += w * src;
-        first = false;
+      if (w > T(0)) {
+        offsets.push_back(o);
+        weights.push_back(w);
       }
-      if (first) dst.setZero();
+    }
+    std::vector<const T*> sources(offsets.size());
+    for (Eigen::Index b = 0; b < layers; ++b) {
+      for (std::size_t k = 0; k < offsets.size(); ++k)
+        sources[k] = moved.data() + wrap(b - offsets[k]) * plane;
+      if (sources.empty())
+        out.segment(b * plane, plane).setZero();
+      else
+        detail::weighted_sum(sources.data(), weights.data(), sources.size(), out.data() + b * plane,
+                             plane);
     }
 
     return detail::renormalise_prediction(in, out, [&] {

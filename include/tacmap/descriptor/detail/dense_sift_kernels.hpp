@@ -16,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "tacmap/detail/weighted_sum.hpp"
 #include "tacmap/image.hpp"
 
 namespace tacmap::detail::dsift {
@@ -142,40 +143,6 @@ struct real_power {
     c = c.pow(exponent);
   }
 };
-
-/// out[i] = sum_t weights[t] * sources[t][i] for i in [0, n): the one inner loop of every filter
-/// here. Blocks of 128 bytes (4 AVX registers) stay in registers across all taps, so each output
-/// is stored once instead of once per tap (about 1.6x faster than tap-by-tap row updates).
-template <class T>
-void weighted_sum(const T* const* sources, const T* weights, std::size_t taps, T* out,
-                  Eigen::Index n) {
-  constexpr Eigen::Index block = 128 / static_cast<Eigen::Index>(sizeof(T));
-  using chunk = Eigen::Array<T, block, 1>;
-  Eigen::Index i = 0;
-  for (; i + block <= n; i += block) {
-    chunk acc = chunk::Zero();
-    for (std::size_t t = 0; t < taps; ++t) {
-      acc += weights[t] * Eigen::Map<const chunk>(sources[t] + i);
-    }
-    Eigen::Map<chunk>(out + i) = acc;
-  }
-  // The tail: whole registers, then single elements, each accumulated in a register (short
-  // rows such as a 42 x 18 tactile image's are mostly tail).
-  constexpr Eigen::Index lane = 32 / static_cast<Eigen::Index>(sizeof(T));
-  using small = Eigen::Array<T, lane, 1>;
-  for (; i + lane <= n; i += lane) {
-    small acc = small::Zero();
-    for (std::size_t t = 0; t < taps; ++t) {
-      acc += weights[t] * Eigen::Map<const small>(sources[t] + i);
-    }
-    Eigen::Map<small>(out + i) = acc;
-  }
-  for (; i < n; ++i) {
-    T acc = 0;
-    for (std::size_t t = 0; t < taps; ++t) acc += weights[t] * sources[t][i];
-    out[i] = acc;
-  }
-}
 
 /// The image divided by `scale`, mirrored by `mirror_pad` pixels, its mean subtracted and
 /// surrounded by zeros to `radius` pixels per side: (h + 2 radius) rows of w + 2 radius,
