@@ -10,8 +10,10 @@
 // f in [0, 1)^2, shift by the integer part, apply the bilinear 2 x 2 kernel for f (so the
 // predicted mean equals the odometry exactly, not rounded to a pixel), and spread with the
 // Gaussian stencil over each state and its k nearest neighbours (weights normalised over the
-// stencil). Shift, bilinear and Gaussian are folded into one small composite stencil that is
-// applied as one block multiply-add per tap over the whole belief image.
+// stencil). Shift, bilinear and Gaussian are folded into one small composite stencil. Square
+// stencils (k = 8, 24, ...) factor into x and y: two passes in which every output is written
+// once as the weighted sum of its taps; other discs are applied as one block multiply-add per
+// tap over the whole belief image.
 //
 // Covariance: per axis, the predicted spread is the truncated Gaussian's variance plus the
 // bilinear split's f(1 - f) px^2 (zero for whole-pixel motions). With the paper's k = 8 the
