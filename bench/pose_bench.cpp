@@ -84,6 +84,20 @@ void pose_predict(benchmark::State& state) {
 }
 BENCHMARK(pose_predict)->Unit(benchmark::kMicrosecond);
 
+// One whole step of Table 1 on 120 px, 36 headings: the control update (a move and a turn)
+// then the measurement update.
+void pose_step(benchmark::State& state) {
+  const auto map = tacmap_bench::bench_map();
+  const auto grid = grid_for(120, 36);
+  tacmap::bayes_filter filter(grid, tacmap::pose_odometry_gaussian{}, model_t({}, map, grid));
+  const tacmap::image<float> z = map.block(30, 40, 42, 18);
+  for (auto _ : state) {
+    filter.reset();
+    benchmark::DoNotOptimize(filter.step({.du_mm = 2.3, .dv_mm = -1.1, .dtheta_rad = 0.05}, z));
+  }
+}
+BENCHMARK(pose_step)->Unit(benchmark::kMicrosecond);
+
 // The known-orientation (planar) update with shared dense features on the same map.
 void planar_update_shared(benchmark::State& state) {
   const auto map = tacmap_bench::bench_map();
