@@ -189,6 +189,22 @@ TEST_CASE_TEMPLATE("describe_at reusing one workspace equals compute, whatever i
                                                       .maxCoeff()));
     CHECK(worst <= 1e-5);
   }
+  // Another parameter set (a different patch, so a different margin) through the same workspace,
+  // on an image of the size it saw last.
+  dense_sift_params other = d.params();
+  other.patch_size = d.patch_size() == 16 ? 12 : 10;
+  const D small_patch(other);
+  const image<T> img = test_image<T>(46, 46, 999U);
+  const std::vector<grid_cell> positions = {{0, 0}, {20, 17}, {46 - other.patch_size, 3}};
+  const auto field = small_patch.compute(img);
+  const auto got = small_patch.describe_at(img, positions, scratch);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    worst = std::max(worst, static_cast<double>((got.col(static_cast<Eigen::Index>(i)) -
+                                                 field.at(positions[i].row, positions[i].col))
+                                                    .abs()
+                                                    .maxCoeff()));
+  CHECK(worst <= 1e-5);
 }
 
 TEST_CASE("describe_at of an empty list is dimension x 0; the image is still checked") {

@@ -148,7 +148,7 @@ TEST_CASE("distances_each: near matches are as exact as from differences; a band
 }
 
 TEST_CASE("distances_each in groups: each column is the sum of its group's distances") {
-  // Groups of 1..5 descriptors (blocks of 3 inside a group, and the rest one by one), with and
+  // Groups of 2..5 descriptors (blocks of 3 inside a group, and the rest one by one), with and
   // without position ranges and a band of tiles: column c must equal the sum over descriptors
   // [c g, (c + 1) g) of the per-descriptor distances.
   std::mt19937 rng(12);
@@ -193,6 +193,16 @@ TEST_CASE("distances_each in groups: each column is the sum of its group's dista
                                    {2, 5}, group);
     for (Eigen::Index c = 0; c < groups; ++c)
       CHECK((band.col(c) == got.col(c).segment(2 * width, 3 * width)).all());
+    // Both: the band of tiles [5, 10) (positions 40..79 for float) with the ranges above.
+    const Eigen::Index t1 = (positions + width - 1) / width;
+    Eigen::ArrayXXf both = Eigen::ArrayXXf::Constant((t1 - 5) * width, groups, -1.0F);
+    tacmap::detail::distances_each(tiles, g, norms_of(g).data(), both.data(), both.rows(),
+                                   ranges.data(), {5, t1}, group);
+    const Eigen::Index real = positions - 5 * width;  // positions in the band
+    CHECK((both.col(0).head(real) == got.col(0).tail(real)).all());
+    CHECK((both.col(1) == -1.0F).all());
+    for (Eigen::Index q = std::max<Eigen::Index>(50, 5 * width); q < positions; ++q)
+      CHECK(both(q - 5 * width, 2) == got(q, 2));
   }
 }
 

@@ -155,6 +155,33 @@ TEST_CASE("rotated likelihood: rotated_tactile turns the image by +theta (pose_g
   CHECK(worst < 1e-5F);
 }
 
+TEST_CASE(
+    "rotated likelihood: rotated_tactile at any heading is the bilinear turn, edges clamped") {
+  // Headings off the quarter turns (sub-pixel bilinear weights in both directions, clamped
+  // samples beyond the footprint): against pose_test::sample, written out independently.
+  const auto& model = model64(36);
+  const auto g = grid64(36);
+  const tacmap::pixel_size canvas = model.canvas_size();
+  const tacmap::image<float> z = pose_test::textured_map(42, 18, 91);
+  for (const Eigen::Index layer : {1, 4, 7, 13, 22, 30}) {
+    CAPTURE(layer);
+    const double theta = g.heading(layer);
+    const double c = std::cos(theta);
+    const double s = std::sin(theta);
+    const auto got = model.rotated_tactile(z, layer);
+    float worst = 0.0F;
+    for (Eigen::Index r = 0; r < canvas.height; ++r)
+      for (Eigen::Index k = 0; k < canvas.width; ++k) {
+        const double x = static_cast<double>(k) + 0.5 - 0.5 * static_cast<double>(canvas.width);
+        const double y = static_cast<double>(r) + 0.5 - 0.5 * static_cast<double>(canvas.height);
+        // Canvas offset (x, y) shows the sensor-frame offset R(-theta) (x, y).
+        const float want = pose_test::sample(z, c * x + s * y + 9.0, -s * x + c * y + 21.0);
+        worst = std::max(worst, std::abs(got(r, k) - want));
+      }
+    CHECK(worst < 1e-5F);
+  }
+}
+
 TEST_CASE("rotated likelihood: distances equal eq. (1) computed from the definition") {
   const auto& model = model64(4);
   const auto g = grid64(4);

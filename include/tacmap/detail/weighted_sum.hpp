@@ -1,5 +1,5 @@
-// tacmap: detail::weighted_sum, the multi-source multiply-add that dense SIFT's filters and the
-// separable motion stencil are built from.
+// tacmap: detail::weighted_sum, the multi-source multiply-add that dense SIFT's filters, the
+// separable motion stencils and the pose model's heading convolution are built from.
 #pragma once
 
 #include <Eigen/Core>

@@ -370,13 +370,15 @@ class rotated_descriptor_likelihood {
     build_needed();
   }
 
-  // The dense-field positions (whole field rows) each column of the band needs: the distance
-  // kernel skips blocks of positions that no descriptor of a block of three needs, and computes
-  // nothing for patches that never land on the map. All pairs: a heading's sum S reads what
-  // any of its patches reads. Aligned: each descriptor only its own patch's rows, about 79 of
-  // the field's 103 for the paper's window on 120 px — and as its columns are ordered patch by
-  // patch (descriptor m A + a), a block of three holds one patch at three neighbouring headings,
-  // whose rows nearly coincide, so about a fifth of the kernel's work is skipped.
+  // The dense-field positions (whole field rows) each tactile descriptor needs, in the kernel's
+  // descriptor order: the distance kernel skips blocks of positions that none of the
+  // descriptors it handles together needs, and computes nothing for patches that never land on
+  // the map. All pairs (descriptor a M + m, handled a heading's group at a time): the group's
+  // sum S reads what any of its patches reads. Aligned (blocks of three descriptors): each
+  // descriptor only its own patch's rows, about 79 of the field's 103 for the paper's window on 120
+  // px — and as its columns are ordered patch by patch (descriptor m A + a), a block of three holds
+  // one patch at three neighbouring headings, whose rows nearly coincide, so about a fifth of the
+  // kernel's work is skipped.
   void build_needed() {
     const auto rows_of = [this](const heading_tables& t, std::size_t m) {
       const patch_reach& r = t.reach[m];
@@ -511,10 +513,10 @@ class rotated_descriptor_likelihood {
   Eigen::Index canvas_cols_ = 0;
   detail::descriptor_tiles<scalar_type> field_tiles_;
   std::vector<heading_tables> heading_;
-  std::vector<detail::position_range> needed_;  // per band column's descriptor (build_needed)
-  // Per-touch distances of one band (positions x M * angles) and the tactile descriptors'
-  // squared norms, kept between calls: not reentrant, like descriptor_likelihood. One filter
-  // per thread.
+  std::vector<detail::position_range> needed_;  // per descriptor, kernel order (build_needed)
+  // Per-touch distances of one band (positions x M * angles, or x angles for all pairs) and the
+  // tactile descriptors' squared norms, kept between calls: not reentrant, like
+  // descriptor_likelihood. One filter per thread.
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> workspace_;
   mutable std::vector<scalar_type> g_norms_;
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> tactile_;   // g, kernel order

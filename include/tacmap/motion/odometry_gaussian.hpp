@@ -10,10 +10,10 @@
 // f in [0, 1)^2, shift by the integer part, apply the bilinear 2 x 2 kernel for f (so the
 // predicted mean equals the odometry exactly, not rounded to a pixel), and spread with the
 // Gaussian stencil over each state and its k nearest neighbours (weights normalised over the
-// stencil). Shift, bilinear and Gaussian are folded into one small composite stencil. Square
-// stencils (k = 8, 24, ...) factor into x and y: two passes in which every output is written
-// once as the weighted sum of its taps; other discs are applied as one block multiply-add per
-// tap over the whole belief image.
+// stencil). Shift, bilinear and Gaussian are folded into one small composite stencil. The square
+// stencils (k = 8: 3 x 3, k = 24: 5 x 5) factor into x and y: two passes in which every output is
+// written once as the weighted sum of its taps; other discs are applied as one block multiply-add
+// per tap over the whole belief image.
 //
 // Covariance: per axis, the predicted spread is the truncated Gaussian's variance plus the
 // bilinear split's f(1 - f) px^2 (zero for whole-pixel motions). With the paper's k = 8 the
@@ -297,7 +297,6 @@ class odometry_gaussian {
   struct separable_scratch {
     Eigen::Array<T, Eigen::Dynamic, 1> rows_padded;  // the input with zero rows above and below
     Eigen::Array<T, Eigen::Dynamic, 1> cols_padded;  // the vertical pass, zero columns each side
-    Eigen::Array<T, Eigen::Dynamic, 1> prefix;       // running sums for clamp's edge piles
     std::vector<const T*> sources;                   // per kept tap: its source at row 0
     std::vector<const T*> row_sources;               // the same at the current row
     std::vector<T> weights;
@@ -315,7 +314,7 @@ class odometry_gaussian {
   // both sides, then the horizontal pass straight into `out`, each output written once as a
   // weighted sum of its taps' sources (detail::weighted_sum) out of zero-padded copies — no
   // per-tap pass over the whole image. Mass landing off the grid is dropped, or with `clamp`
-  // added to the edge row or column it crossed (from running sums). Taps that move every row
+  // added to the edge row or column it crossed. Taps that move every row
   // (column) off the grid only matter for clamp.
   template <class T>
   void separable_transport(const Eigen::Map<const image<T>>& in, Eigen::Map<image<T>>& out,
@@ -364,21 +363,17 @@ class odometry_gaussian {
       }
     }
     if (clamp) {
-      // Rows that land above row 0 (below row h - 1) pile onto it: prefix(k) = sum of the first
-      // k rows of `in`, per column.
-      s.prefix.resize((h + 1) * w);
-      Eigen::Map<image<T>> prefix(s.prefix.data(), h + 1, w);
-      prefix.row(0).setZero();
-      for (Eigen::Index y = 0; y < h; ++y) prefix.row(y + 1) = prefix.row(y) + in.row(y);
+      // Rows that land above row 0 (below row h - 1) pile onto it. Summed directly, not as a
+      // difference of running sums, which in float could lose a small pile next to a large one.
       for (int t = 0; t < taps; ++t) {
         const Eigen::Index sy = y0 + t;
         if (!(wy[t] > 0.0)) continue;
         const auto wt = static_cast<T>(wy[t]);
         const Eigen::Index above = std::clamp<Eigen::Index>(-sy, 0, h);  // rows j < -sy
         const Eigen::Index below = std::clamp<Eigen::Index>(sy, 0, h);   // rows j >= h - sy
-        if (above > 0) mid.row(0).segment(pad_x, w) += wt * prefix.row(above);
+        if (above > 0) mid.row(0).segment(pad_x, w) += wt * in.topRows(above).colwise().sum();
         if (below > 0)
-          mid.row(h - 1).segment(pad_x, w) += wt * (prefix.row(h) - prefix.row(h - below));
+          mid.row(h - 1).segment(pad_x, w) += wt * in.bottomRows(below).colwise().sum();
       }
     }
     // Horizontal: out(y, x) = sum_t wx[t] mid(y, x - sx_t).
