@@ -56,13 +56,15 @@ std::vector<grid_cell> positions_for(Eigen::Index last_row, Eigen::Index last_co
   return p;
 }
 
-/// describe_at(img, positions) against compute(img) column by column; returns the largest
-/// difference and checks the shape.
+/// describe_at(img, positions[, scratch]) against compute(img) column by column; returns the
+/// largest difference and checks the shape.
 template <class D>
 double max_difference_to_compute(const D& d, const image<typename D::scalar_type>& img,
-                                 const std::vector<grid_cell>& positions) {
+                                 const std::vector<grid_cell>& positions,
+                                 typename D::workspace* scratch = nullptr) {
   const auto field = d.compute(img);
-  const auto described = d.describe_at(img, positions);
+  const auto described =
+      scratch == nullptr ? d.describe_at(img, positions) : d.describe_at(img, positions, *scratch);
   REQUIRE(described.rows() == d.dimension());
   REQUIRE(described.cols() == static_cast<Eigen::Index>(positions.size()));
   double worst = 0.0;
@@ -178,16 +180,7 @@ TEST_CASE_TEMPLATE("describe_at reusing one workspace equals compute, whatever i
     std::vector<grid_cell> positions =
         positions_for(rows - d.patch_size(), cols - d.patch_size(), seed + 50U);
     positions.resize(3 + seed % 4);
-    const auto field = d.compute(img);
-    const auto got = d.describe_at(img, positions, scratch);
-    REQUIRE(got.cols() == static_cast<Eigen::Index>(positions.size()));
-    double worst = 0.0;
-    for (std::size_t i = 0; i < positions.size(); ++i)
-      worst = std::max(worst, static_cast<double>((got.col(static_cast<Eigen::Index>(i)) -
-                                                   field.at(positions[i].row, positions[i].col))
-                                                      .abs()
-                                                      .maxCoeff()));
-    CHECK(worst <= 1e-5);
+    CHECK(max_difference_to_compute(d, img, positions, &scratch) <= 1e-5);
   }
   // Another parameter set (a different patch, so a different margin) through the same workspace,
   // on an image of the size it saw last.
@@ -196,15 +189,7 @@ TEST_CASE_TEMPLATE("describe_at reusing one workspace equals compute, whatever i
   const D small_patch(other);
   const image<T> img = test_image<T>(46, 46, 999U);
   const std::vector<grid_cell> positions = {{0, 0}, {20, 17}, {46 - other.patch_size, 3}};
-  const auto field = small_patch.compute(img);
-  const auto got = small_patch.describe_at(img, positions, scratch);
-  double worst = 0.0;
-  for (std::size_t i = 0; i < positions.size(); ++i)
-    worst = std::max(worst, static_cast<double>((got.col(static_cast<Eigen::Index>(i)) -
-                                                 field.at(positions[i].row, positions[i].col))
-                                                    .abs()
-                                                    .maxCoeff()));
-  CHECK(worst <= 1e-5);
+  CHECK(max_difference_to_compute(small_patch, img, positions, &scratch) <= 1e-5);
 }
 
 TEST_CASE("describe_at of an empty list is dimension x 0; the image is still checked") {
