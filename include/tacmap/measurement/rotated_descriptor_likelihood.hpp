@@ -11,8 +11,9 @@
 // and the likelihood shape exactly as in `descriptor_likelihood`:
 //   all_pairs:  d(x, a, z) = sum_m sum_n || F(x + o_{a,m}) - g_{a,n} ||
 //   aligned:    d(x, a, z) = sum_m       || F(x + o_{a,m}) - g_{a,m} ||
-// All M x A tactile descriptors meet the field in one pass (detail::distances_each), then each
-// heading's layer is M shifted whole-image block additions.
+// All M x A tactile descriptors meet the field in one pass (detail::distances_each), band of
+// positions by band, and each band's distances are added, shifted by o_{a,m}, to every layer
+// while they are in cache (see `distances`).
 //
 // Conventions: pose_grid.hpp (headings, layer order). Outside the tactile image the canvas
 // repeats its edge pixels (so an edge of the footprint is not mistaken for an edge in the
