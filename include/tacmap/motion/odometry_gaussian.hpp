@@ -309,30 +309,89 @@ class odometry_gaussian {
       return workspace_d_;
   }
 
+  // The taps of one axis of a separable stencil: tap t moves mass by origin + t cells of an
+  // axis n cells long, with weight w[t]. A tap "keeps" mass on the grid when some cells stay on
+  // it (|shift| < n); with clamp, every tap also piles what it moves past either end onto that
+  // end.
+  struct axis_taps {
+    Eigen::Index origin;
+    const double* w;
+    int count;
+    Eigen::Index n;
+
+    // f(shift, weight) for every tap that keeps mass on the grid.
+    template <class F>
+    void each_kept(F&& f) const {
+      for (int t = 0; t < count; ++t) {
+        const Eigen::Index shift = origin + t;
+        if (w[t] > 0.0 && std::abs(shift) < n) f(shift, w[t]);
+      }
+    }
+    // The zero padding the kept taps read: their largest |shift|.
+    [[nodiscard]] Eigen::Index padding() const {
+      Eigen::Index pad = 0;
+      each_kept([&](Eigen::Index shift, double) { pad = std::max(pad, std::abs(shift)); });
+      return pad;
+    }
+    // f(weight, low, high): the tap moves the first `low` cells past the start and the last
+    // `high` cells past the end (either may be 0).
+    template <class F>
+    void each_pile(F&& f) const {
+      for (int t = 0; t < count; ++t) {
+        const Eigen::Index shift = origin + t;
+        if (!(w[t] > 0.0)) continue;
+        const Eigen::Index low = std::clamp<Eigen::Index>(-shift, 0, n);  // cells j < -shift
+        const Eigen::Index high = std::clamp<Eigen::Index>(shift, 0, n);  // cells j >= n - shift
+        if (low > 0 || high > 0) f(w[t], low, high);
+      }
+    }
+  };
+
+  // rows x len outputs, row y at dst + y * dst_stride: the weighted sum of the kept taps'
+  // sources, tap `shift` reading src + y * src_stride - shift * unit (a zero-padded buffer, so
+  // mass moved off the grid reads zeros). All zero when no tap keeps anything.
+  template <class T>
+  void apply_taps(const axis_taps& taps, const T* src, Eigen::Index unit, Eigen::Index src_stride,
+                  T* dst, Eigen::Index dst_stride, Eigen::Index rows, Eigen::Index len,
+                  separable_scratch<T>& s) const {
+    s.sources.clear();
+    s.weights.clear();
+    taps.each_kept([&](Eigen::Index shift, double w) {
+      s.sources.push_back(src - shift * unit);
+      s.weights.push_back(static_cast<T>(w));
+    });
+    s.row_sources.resize(s.sources.size());
+    for (Eigen::Index y = 0; y < rows; ++y) {
+      T* row = dst + y * dst_stride;
+      if (s.sources.empty()) {
+        std::fill(row, row + len, T(0));
+        continue;
+      }
+      for (std::size_t k = 0; k < s.sources.size(); ++k)
+        s.row_sources[k] = s.sources[k] + y * src_stride;
+      detail::weighted_sum(s.row_sources.data(), s.weights.data(), s.sources.size(), row, len);
+    }
+  }
+
   // out = the stencil's x taps (tap t moves mass by x0 + t columns, weight wx[t]) applied to the
   // y taps (y0 + t rows, wy[t]) of `in`: the vertical pass into a buffer with zero columns on
   // both sides, then the horizontal pass straight into `out`, each output written once as a
   // weighted sum of its taps' sources (detail::weighted_sum) out of zero-padded copies — no
   // per-tap pass over the whole image. Mass landing off the grid is dropped, or with `clamp`
-  // added to the edge row or column it crossed. Taps that move every row
-  // (column) off the grid only matter for clamp.
+  // added to the edge row or column it crossed (summed directly: a difference of running sums
+  // could lose, in float, a small pile next to a large one).
   template <class T>
   void separable_transport(const Eigen::Map<const image<T>>& in, Eigen::Map<image<T>>& out,
                            Eigen::Index x0, const double* wx, Eigen::Index y0, const double* wy,
                            int taps, bool clamp) const {
     const Eigen::Index h = in.rows();
     const Eigen::Index w = in.cols();
+    const axis_taps along_y{y0, wy, taps, h};
+    const axis_taps along_x{x0, wx, taps, w};
     separable_scratch<T>& s = workspace<T>();
-    // Padding: the largest shift of a tap that keeps some rows (columns) on the grid.
-    Eigen::Index pad_y = 0;
-    Eigen::Index pad_x = 0;
-    for (int t = 0; t < taps; ++t) {
-      const Eigen::Index sy = y0 + t;
-      const Eigen::Index sx = x0 + t;
-      if (wy[t] > 0.0 && std::abs(sy) < h) pad_y = std::max(pad_y, std::abs(sy));
-      if (wx[t] > 0.0 && std::abs(sx) < w) pad_x = std::max(pad_x, std::abs(sx));
-    }
-    // Vertical: row y of the result = sum_t wy[t] in(y - sy_t), rows outside the grid zero.
+    const Eigen::Index pad_y = along_y.padding();
+    const Eigen::Index pad_x = along_x.padding();
+    // Vertical: mid(y, pad_x + x) = sum_t wy[t] in(y - sy_t, x), rows off the grid zero.
     s.rows_padded.resize((h + 2 * pad_y) * w);
     s.rows_padded.head(pad_y * w).setZero();
     s.rows_padded.tail(pad_y * w).setZero();
@@ -342,73 +401,22 @@ class odometry_gaussian {
     Eigen::Map<image<T>> mid(s.cols_padded.data(), h, wp);
     mid.leftCols(pad_x).setZero();
     mid.rightCols(pad_x).setZero();
-    s.sources.clear();
-    s.weights.clear();
-    for (int t = 0; t < taps; ++t) {
-      const Eigen::Index sy = y0 + t;
-      if (!(wy[t] > 0.0) || std::abs(sy) >= h) continue;
-      s.sources.push_back(s.rows_padded.data() + (pad_y - sy) * w);
-      s.weights.push_back(static_cast<T>(wy[t]));
-    }
-    if (s.sources.empty()) {
-      mid.middleCols(pad_x, w).setZero();
-    } else {
-      // Row by row: each output row is written into `mid` between its zero columns.
-      std::vector<const T*>& row_sources = s.row_sources;
-      row_sources = s.sources;
-      for (Eigen::Index y = 0; y < h; ++y) {
-        for (std::size_t k = 0; k < row_sources.size(); ++k) row_sources[k] = s.sources[k] + y * w;
-        detail::weighted_sum(row_sources.data(), s.weights.data(), row_sources.size(),
-                             mid.data() + y * wp + pad_x, w);
-      }
-    }
-    if (clamp) {
-      // Rows that land above row 0 (below row h - 1) pile onto it. Summed directly, not as a
-      // difference of running sums, which in float could lose a small pile next to a large one.
-      for (int t = 0; t < taps; ++t) {
-        const Eigen::Index sy = y0 + t;
-        if (!(wy[t] > 0.0)) continue;
-        const auto wt = static_cast<T>(wy[t]);
-        const Eigen::Index above = std::clamp<Eigen::Index>(-sy, 0, h);  // rows j < -sy
-        const Eigen::Index below = std::clamp<Eigen::Index>(sy, 0, h);   // rows j >= h - sy
-        if (above > 0) mid.row(0).segment(pad_x, w) += wt * in.topRows(above).colwise().sum();
-        if (below > 0)
-          mid.row(h - 1).segment(pad_x, w) += wt * in.bottomRows(below).colwise().sum();
-      }
-    }
-    // Horizontal: out(y, x) = sum_t wx[t] mid(y, x - sx_t).
-    s.sources.clear();
-    s.weights.clear();
-    for (int t = 0; t < taps; ++t) {
-      const Eigen::Index sx = x0 + t;
-      if (!(wx[t] > 0.0) || std::abs(sx) >= w) continue;
-      s.sources.push_back(mid.data() + pad_x - sx);
-      s.weights.push_back(static_cast<T>(wx[t]));
-    }
-    std::vector<const T*>& row_sources = s.row_sources;
-    row_sources = s.sources;
-    for (Eigen::Index y = 0; y < h; ++y) {
-      if (s.sources.empty()) {
-        out.row(y).setZero();
-      } else {
-        for (std::size_t k = 0; k < row_sources.size(); ++k) row_sources[k] = s.sources[k] + y * wp;
-        detail::weighted_sum(row_sources.data(), s.weights.data(), row_sources.size(),
-                             out.data() + y * w, w);
-      }
-    }
-    if (clamp) {
-      // Columns that land left of column 0 (right of w - 1) pile onto it.
-      for (int t = 0; t < taps; ++t) {
-        const Eigen::Index sx = x0 + t;
-        if (!(wx[t] > 0.0)) continue;
-        const auto wt = static_cast<T>(wx[t]);
-        const Eigen::Index left = std::clamp<Eigen::Index>(-sx, 0, w);  // columns c < -sx
-        const Eigen::Index right = std::clamp<Eigen::Index>(sx, 0, w);  // columns c >= w - sx
-        if (left > 0) out.col(0) += wt * mid.middleCols(pad_x, left).rowwise().sum();
+    apply_taps(along_y, s.rows_padded.data() + pad_y * w, w, w, mid.data() + pad_x, wp, h, w, s);
+    if (clamp)
+      along_y.each_pile([&](double wt, Eigen::Index above, Eigen::Index below) {
+        const auto k = static_cast<T>(wt);
+        if (above > 0) mid.row(0).segment(pad_x, w) += k * in.topRows(above).colwise().sum();
+        if (below > 0) mid.row(h - 1).segment(pad_x, w) += k * in.bottomRows(below).colwise().sum();
+      });
+    // Horizontal: out(y, x) = sum_t wx[t] mid(y, pad_x + x - sx_t).
+    apply_taps(along_x, mid.data() + pad_x, 1, wp, out.data(), w, h, w, s);
+    if (clamp)
+      along_x.each_pile([&](double wt, Eigen::Index left, Eigen::Index right) {
+        const auto k = static_cast<T>(wt);
+        if (left > 0) out.col(0) += k * mid.middleCols(pad_x, left).rowwise().sum();
         if (right > 0)
-          out.col(w - 1) += wt * mid.middleCols(pad_x + w - right, right).rowwise().sum();
-      }
-    }
+          out.col(w - 1) += k * mid.middleCols(pad_x + w - right, right).rowwise().sum();
+      });
   }
 
   odometry_gaussian_params params_;
