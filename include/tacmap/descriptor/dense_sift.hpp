@@ -436,14 +436,19 @@ class dense_sift {
     }
   }
 
+  /// What the image is divided by (pipeline step 1): its largest magnitude, or 1 for an
+  /// all-zero image (no gradient, zero descriptors, no NaN).
+  [[nodiscard]] static T peak(const image_view<T>& img) {
+    const T scale = img.abs().maxCoeff();
+    return scale > T(0) ? scale : T(1);
+  }
+
   /// The orientation channels of `img` (layout of detail::dsift::orientation_channels).
   void orientation_channels(const image_view<T>& img,
                             Eigen::Array<T, Eigen::Dynamic, 1>& channels) const {
-    T scale = img.abs().maxCoeff();
-    if (!(scale > T(0))) scale = T(1);  // all zero: no gradient, zero descriptors, no NaN
     Eigen::Array<T, Eigen::Dynamic, 1> gx;
     Eigen::Array<T, Eigen::Dynamic, 1> gy;
-    const Eigen::Index stride = detail::dsift::gradients(img, scale, gradient_, gx, gy);
+    const Eigen::Index stride = detail::dsift::gradients(img, peak(img), gradient_, gx, gy);
     detail::dsift::orientation_channels<NumAngles>(gx, gy, img.rows(), img.cols(), stride, margin(),
                                                    cos_a_, sin_a_, params_.alpha, channels);
   }
@@ -452,10 +457,8 @@ class dense_sift {
   /// through the workspace's memory (no allocation once it has seen an image of this size).
   void span_channels(const image_view<T>& img, const std::vector<detail::dsift::column_span>& spans,
                      workspace& scratch) const {
-    T scale = img.abs().maxCoeff();
-    if (!(scale > T(0))) scale = T(1);
-    const Eigen::Index stride = detail::dsift::gradients(img, scale, gradient_, spans, scratch.gx,
-                                                         scratch.gy, scratch.gradients);
+    const Eigen::Index stride = detail::dsift::gradients(img, peak(img), gradient_, spans,
+                                                         scratch.gx, scratch.gy, scratch.gradients);
     // The margins are known zero only for the very buffer that had them cleared: same layout
     // and still that size (a moved-from workspace has them cleared again).
     const Eigen::Index size = (img.rows() + 2 * margin()) * (img.cols() + 2 * margin()) * NumAngles;

@@ -161,29 +161,8 @@ class rotated_descriptor_likelihood {
   /// heading a.
   [[nodiscard]] Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> tactile_descriptors(
       const measurement_type& z) const {
-    check_measurement(z);
-    image<scalar_type>& zt = extended_;  // reused, like the canvas
-    extend(z, zt);
-    Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g(descriptor_.dimension(),
-                                                                m_count_ * angles_);
-    image<scalar_type>& canvas = canvas_;  // reused: one touch renders 36 canvases
-    canvas.resize(canvas_rows_, canvas_cols_);
-    for (Eigen::Index a = 0; a < angles_; ++a) {
-      const heading_tables& h = heading_[static_cast<std::size_t>(a)];
-      render(zt, h, canvas);
-      const std::span<const grid_cell> cells(h.canvas_top_left.data(), h.canvas_top_left.size());
-      if constexpr (describes_at_reusing<Descriptor>) {
-        g.middleCols(a * m_count_, m_count_) = descriptor_.describe_at(canvas, cells, scratch_);
-      } else if constexpr (describes_at<Descriptor>) {
-        g.middleCols(a * m_count_, m_count_) = descriptor_.describe_at(canvas, cells);
-      } else {
-        const auto f = descriptor_.compute(canvas);
-        for (Eigen::Index m = 0; m < m_count_; ++m) {
-          const grid_cell c = h.canvas_top_left[static_cast<std::size_t>(m)];
-          g.col(a * m_count_ + m) = f.at(c.row, c.col);
-        }
-      }
-    }
+    Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g;
+    describe_tactile(z, g, false);
     return g;
   }
 
@@ -199,17 +178,10 @@ class rotated_descriptor_likelihood {
       const requires std::same_as<typename G::scalar_type, scalar_type> {
     check_grid(grid);
     const bool summed = params_.pairs == pairing::all_pairs;
-    // Aligned: the descriptors patch by patch (column m A + a; see build_needed).
+    // Into the model's workspace, in the kernel's order (aligned: patch by patch, column
+    // m A + a; see build_needed).
     auto& g = tactile_;
-    g = tactile_descriptors(z);
-    if (!summed) {
-      auto& by_patch = by_patch_;
-      by_patch.resize(g.rows(), g.cols());
-      for (Eigen::Index a = 0; a < angles_; ++a)
-        for (Eigen::Index m = 0; m < m_count_; ++m)
-          by_patch.col(m * angles_ + a) = g.col(a * m_count_ + m);
-      g.swap(by_patch);
-    }
+    describe_tactile(z, g, !summed);
     constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
     const Eigen::Index positions = field_rows_ * field_cols_;
     const Eigen::Index tiles = (positions + width - 1) / width;
@@ -296,6 +268,42 @@ class rotated_descriptor_likelihood {
     std::vector<std::int32_t> source;
     std::vector<std::array<float, 2>> fraction;
   };
+
+  // Every tactile descriptor into g (dimension x M A): column a M + m is patch m at heading a,
+  // or with `by_patch` column m A + a (the aligned kernel's order). g is resized, so a reused
+  // workspace costs no allocation.
+  void describe_tactile(const measurement_type& z,
+                        Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>& g,
+                        bool by_patch) const {
+    check_measurement(z);
+    image<scalar_type>& zt = extended_;  // reused, like the canvas
+    extend(z, zt);
+    g.resize(descriptor_.dimension(), m_count_ * angles_);
+    const auto column = [&](Eigen::Index a, Eigen::Index m) {
+      return by_patch ? m * angles_ + a : a * m_count_ + m;
+    };
+    image<scalar_type>& canvas = canvas_;  // reused: one touch renders 36 canvases
+    canvas.resize(canvas_rows_, canvas_cols_);
+    for (Eigen::Index a = 0; a < angles_; ++a) {
+      const heading_tables& h = heading_[static_cast<std::size_t>(a)];
+      render(zt, h, canvas);
+      const std::span<const grid_cell> cells(h.canvas_top_left.data(), h.canvas_top_left.size());
+      const auto store = [&](const auto& described) {  // dimension x M, patch m in column m
+        for (Eigen::Index m = 0; m < m_count_; ++m) g.col(column(a, m)) = described.col(m);
+      };
+      if constexpr (describes_at_reusing<Descriptor>) {
+        store(descriptor_.describe_at(canvas, cells, scratch_));
+      } else if constexpr (describes_at<Descriptor>) {
+        store(descriptor_.describe_at(canvas, cells));
+      } else {
+        const auto f = descriptor_.compute(canvas);
+        for (Eigen::Index m = 0; m < m_count_; ++m) {
+          const grid_cell c = h.canvas_top_left[static_cast<std::size_t>(m)];
+          g.col(column(a, m)) = f.at(c.row, c.col);
+        }
+      }
+    }
+  }
 
   void build_headings(const std::vector<grid_cell>& offsets) {
     const double p = static_cast<double>(descriptor_.patch_size());
@@ -520,8 +528,7 @@ class rotated_descriptor_likelihood {
   // descriptor_likelihood. One filter per thread.
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> workspace_;
   mutable std::vector<scalar_type> g_norms_;
-  mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> tactile_;   // g, kernel order
-  mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> by_patch_;  // reordering
+  mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> tactile_;  // g, kernel order
   mutable typename descriptor_workspace<Descriptor>::type scratch_;  // the descriptor's scratch
   mutable image<scalar_type> canvas_;    // the tactile image turned to one heading
   mutable image<scalar_type> extended_;  // the tactile image, edge-extended (extend())
