@@ -15,8 +15,11 @@
 // Scenarios (sim/scenario.hpp): --scenario ideal (default) presses the map's own image with a
 // new sensor; --scenario realistic makes the map a camera image (texture, illumination,
 // shading, blur, noise, gamma), misregisters the object by ~1 mm / 1 degree per sequence,
-// jitters every press (orientation, tilt, depth) and uses a worn sensor. Every effect has its
-// own option, applied on top of the scenario (e.g. --scenario realistic --camera-gamma 1).
+// jitters every press (orientation, tilt, depth) and uses a worn sensor; --scenario unknown is
+// a photo of an object we know nothing about: realistic, plus raised parts brighter or darker
+// at random per sequence, regions of the opposite relation and printed ink. Every effect has
+// its own option, applied on top of the scenario (e.g. --scenario realistic --camera-gamma 1,
+// --polarity dark, --mixed-polarity 0.3, --ink-coverage 0.1, --albedo-contrast 0).
 //
 //   tacmap-evaluate --photo camera.png --model sift_lite,ncc --output eval.csv
 //   tacmap-evaluate --scenario realistic --model ncc --tau 0.05,0.1,0.2
@@ -196,11 +199,15 @@ int main(int argc, char** argv) try {
   bool no_gecko = false;
   std::vector<std::string> photos;
   std::vector<std::string> models{"classic_sift"}, pairings{"aligned"}, shapes{"exponential"},
-      features{"per_window"};
+      features{"per_window"}, appearances{"fixed"};
+  std::vector<double> appearance_switches{0.0};
+  // Signed, so that a negative count is refused rather than wrapped to "all".
+  long long sequences = 0;
   std::size_t max_sequences = 0;
   std::uint64_t seed = 1;
   std::vector<double> taus;
   std::string scenario_name = "ideal";
+  std::string polarity_name;  // empty: the scenario's
   double tempering = 1.0, motion_sigma = 1.0;
   int motion_k = 8;
   std::vector<int> headings{0};
@@ -241,6 +248,18 @@ int main(int argc, char** argv) try {
       {"--orientation-jitter", "per-press orientation std, degrees", 0.0, 45.0, {}},
       {"--tilt-jitter", "per-press tilt std, degrees", 0.0, 5.0, {}},
       {"--press-depth-jitter", "per-press relative depth std", 0.0, 1.0, {}},
+      {"--ink-coverage", "camera map: fraction of the area covered by printed ink", 0.0, 1.0, {}},
+      {"--ink-contrast", "camera map: ink opacity towards black or white", 0.0, 1.0, {}},
+      {"--albedo-contrast",
+       "camera map: fraction of the image's contrast the object's colour keeps (0 = one colour)",
+       0.0,
+       1.0,
+       {}},
+      {"--mixed-polarity",
+       "relief: fraction of the area where height and brightness relate the other way",
+       0.0,
+       1.0,
+       {}},
   };
   app.add_option("--gecko", gecko_dir, "folder of the gecko protocol (protocol.txt)");
   app.add_flag("--no-gecko", no_gecko, "do not evaluate on the gecko");
@@ -251,8 +270,17 @@ int main(int argc, char** argv) try {
   app.add_option("--pairing", pairings, "all_pairs, aligned")->delimiter(',');
   app.add_option("--shape", shapes, "inverse, exponential")->delimiter(',');
   app.add_option("--features", features, "per_window, shared_dense")->delimiter(',');
-  app.add_option("--sequences", max_sequences,
-                 "run only the first N sequences of each map (0 = all)");
+  app.add_option("--appearance", appearances,
+                 "how the map's brightness relates to height: fixed (raised = bright, as "
+                 "before), latent (both relations as hypotheses of the filter); "
+                 "comma-separated to compare")
+      ->delimiter(',');
+  app.add_option("--appearance-switch", appearance_switches,
+                 "latent appearance: probability that the hypothesis changes between touches "
+                 "(comma-separated to compare; default 0)")
+      ->delimiter(',')
+      ->check(CLI::Range(0.0, 0.5));
+  app.add_option("--sequences", sequences, "run only the first N sequences of each map (0 = all)");
   app.add_option("--seed", seed, "seeds the simulator and the photographs' protocols");
   app.add_option("--tau", taus,
                  "temperature(s) (exponential shape / NCC), comma-separated; default: the model's")
@@ -278,23 +306,45 @@ int main(int argc, char** argv) try {
       "exit 1 when any map x configuration localizes fewer than this fraction of sequences");
   app.add_flag("--quiet,-q", quiet, "no progress bar");
   app.add_option("--scenario", scenario_name,
-                 "ideal (the map's own image, a new sensor) or realistic (camera map, "
-                 "misregistration, press jitter, worn sensor; sim/scenario.hpp)");
+                 "ideal (the map's own image, a new sensor), realistic (camera map, "
+                 "misregistration, press jitter, worn sensor; sim/scenario.hpp) or unknown "
+                 "(realistic, plus random polarity, mixed polarity and printed ink)");
+  app.add_option("--polarity", polarity_name,
+                 "relief: raised parts bright, dark, or random (drawn per sequence) "
+                 "(default: the scenario's)");
   for (auto* knobs : {&sensor_knobs, &scenario_knobs})
     for (auto& k : *knobs)
       app.add_option(k.flag, k.value, std::string(k.help) + " (default: the scenario's)")
           ->check(CLI::Range(k.lo, k.hi));
   CLI11_PARSE(app, argc, argv);
 
-  const auto scenario = parse_choice<tacmap::scenario_kind>(
-      "--scenario", scenario_name,
-      {{"ideal", tacmap::scenario_kind::ideal}, {"realistic", tacmap::scenario_kind::realistic}});
+  if (sequences < 0)
+    throw CLI::ValidationError("--sequences", std::to_string(sequences) +
+                                                  " is not a number of sequences; expected N >= 0 "
+                                                  "(the first N of each map; 0 = all)");
+  max_sequences = static_cast<std::size_t>(sequences);
+  const auto scenario =
+      parse_choice<tacmap::scenario_kind>("--scenario", scenario_name,
+                                          {{"ideal", tacmap::scenario_kind::ideal},
+                                           {"realistic", tacmap::scenario_kind::realistic},
+                                           {"unknown", tacmap::scenario_kind::unknown}});
   tacmap::simulator_params sim;  // the simulated sensor's physics (defaults: the paper's array)
   tacmap::scenario_params effects;
   if (scenario == tacmap::scenario_kind::realistic) {
     sim = tacmap::realistic_sensor(sim);
     effects = tacmap::scenario_params::realistic();
+  } else if (scenario == tacmap::scenario_kind::unknown) {
+    sim = tacmap::realistic_sensor(sim);
+    effects = tacmap::scenario_params::unknown_object();
   }
+  if (!polarity_name.empty())
+    effects.polarity = parse_choice<tacmap::relief_polarity>(
+        "--polarity", polarity_name,
+        {{tacmap::to_string(tacmap::relief_polarity::bright_raised),
+          tacmap::relief_polarity::bright_raised},
+         {tacmap::to_string(tacmap::relief_polarity::dark_raised),
+          tacmap::relief_polarity::dark_raised},
+         {tacmap::to_string(tacmap::relief_polarity::random), tacmap::relief_polarity::random}});
   const auto set = [](const knob& k, auto& field) {
     if (k.value) field = *k.value;
   };
@@ -309,8 +359,10 @@ int main(int argc, char** argv) try {
                             &effects.camera_noise,           &effects.camera_gamma,
                             &effects.registration_shift_mm,  &effects.registration_rotation_deg,
                             &effects.orientation_jitter_deg, &effects.tilt_jitter_deg,
-                            &effects.press_depth_jitter};
-  static_assert(std::size(fields) == 13);
+                            &effects.press_depth_jitter,     &effects.ink_coverage,
+                            &effects.ink_contrast,           &effects.albedo_contrast,
+                            &effects.mixed_polarity};
+  static_assert(std::size(fields) == 17);
   for (std::size_t i = 0; i < std::size(fields); ++i) set(scenario_knobs[i], *fields[i]);
   sim.validate();
   effects.validate();
@@ -401,6 +453,33 @@ int main(int argc, char** argv) try {
                                  "--model sift_lite or classic_sift with --headings > 0)");
   }
 
+  // One copy of every configuration per --appearance (and, for latent, --appearance-switch).
+  {
+    std::vector<tacmap::localization_config> expanded;
+    for (const auto& a : appearances) {
+      const auto handling = parse_choice<tacmap::appearance_handling>(
+          "--appearance", a,
+          {{"fixed", tacmap::appearance_handling::fixed},
+           {"latent", tacmap::appearance_handling::latent}});
+      for (const double sw : appearance_switches) {
+        if (sw > 0.0 && handling != tacmap::appearance_handling::latent) {
+          if (appearances.size() == 1)
+            throw CLI::ValidationError(
+                "--appearance-switch",
+                csv_number(sw) + " switches between appearance hypotheses, but --appearance " + a +
+                    " has none; use --appearance latent");
+          continue;
+        }
+        for (auto c : configs) {
+          c.appearance = handling;
+          c.appearance_switch = sw;
+          expanded.push_back(c);
+        }
+      }
+    }
+    configs = std::move(expanded);
+  }
+
   std::vector<named_map> maps;
   if (!no_gecko)
     maps.push_back(
@@ -418,7 +497,7 @@ int main(int argc, char** argv) try {
                                              "' for writing; check the folder exists");
   csv << "map,config,model,pairing,shape,features,sequence,touch,location,true_x_mm,true_y_mm,"
          "map_x_mm,map_y_mm,error_mm,entropy_nats,accepted,localized,touches_to_localize,scenario,"
-         "tau,headings,true_theta_rad,map_theta_rad\n";
+         "tau,headings,true_theta_rad,map_theta_rad,raised_dark,p_inverted\n";
 
   std::size_t total = 0;
   for (const auto& m : maps) {
@@ -430,8 +509,8 @@ int main(int argc, char** argv) try {
   std::fprintf(stderr, "scenario: %s\n", to_string(scenario));
   std::printf(
       "| map | configuration | localized | median touches to localize | median final error mm | "
-      "median final entropy nats |\n");
-  std::printf("|---|---|---|---|---|---|\n");
+      "median final entropy nats | raised dark: localized | median final P(true appearance) |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
   for (const auto& m : maps) {
     const std::size_t n = max_sequences == 0 ? m.protocol.sequences.size()
                                              : std::min(m.protocol.sequences.size(), max_sequences);
@@ -439,7 +518,8 @@ int main(int argc, char** argv) try {
       if (!quiet) progress(done, total, m.name + " " + config.name() + " (building the model)");
       tacmap::localization_experiment experiment(m.protocol, config);  // once per map x config
       std::size_t successes = 0;
-      std::vector<double> ttl, final_errors, final_entropies;
+      std::vector<double> ttl, final_errors, final_entropies, right_appearance;
+      std::size_t dark_sequences = 0, dark_successes = 0;
       for (std::size_t q = 0; q < n; ++q) {
         const auto run = experiment.run(q);
         const bool ok = tacmap::localized(run.touches);
@@ -448,6 +528,12 @@ int main(int argc, char** argv) try {
         if (ok) ttl.push_back(static_cast<double>(*t));
         final_errors.push_back(run.touches.back().error_mm);
         final_entropies.push_back(run.touches.back().entropy_nats);
+        if (run.raised_dark) {
+          ++dark_sequences;
+          dark_successes += ok ? 1U : 0U;
+        }
+        if (const auto& p = run.touches.back().appearance_probability; p.size() == 2)
+          right_appearance.push_back(p[run.raised_dark ? 1 : 0]);
         for (const auto& r : run.touches)
           csv << m.name << ',' << config.name() << ',' << tacmap::to_string(config.model) << ','
               << (config.model == tacmap::measurement_kind::ncc ? ""
@@ -466,16 +552,24 @@ int main(int argc, char** argv) try {
               << (r.accepted ? 1 : 0) << ',' << (ok ? 1 : 0) << ','
               << (t ? std::to_string(*t) : std::string()) << ',' << to_string(scenario) << ','
               << (config.tau ? csv_number(*config.tau) : std::string()) << ',' << config.headings
-              << ',' << csv_number(r.true_theta_rad) << ',' << csv_number(r.map_theta_rad) << '\n';
+              << ',' << csv_number(r.true_theta_rad) << ',' << csv_number(r.map_theta_rad) << ','
+              << (run.raised_dark ? 1 : 0) << ','
+              << (r.appearance_probability.size() == 2 ? csv_number(r.appearance_probability[1])
+                                                       : std::string())
+              << '\n';
         ++done;
         if (!quiet) progress(done, total, m.name + " " + config.name());
       }
       if (!quiet) std::fprintf(stderr, "\r%*s\r", 110, "");
       char ttl_text[32] = "-";
       if (!ttl.empty()) std::snprintf(ttl_text, sizeof ttl_text, "%.1f", tacmap::median(ttl));
-      std::printf("| %s | %s | %zu / %zu | %s | %.2f | %.2f |\n", m.name.c_str(),
+      char appearance_text[32] = "-";
+      if (!right_appearance.empty())
+        std::snprintf(appearance_text, sizeof appearance_text, "%.3f",
+                      tacmap::median(right_appearance));
+      std::printf("| %s | %s | %zu / %zu | %s | %.2f | %.2f | %zu / %zu | %s |\n", m.name.c_str(),
                   config.name().c_str(), successes, n, ttl_text, tacmap::median(final_errors),
-                  tacmap::median(final_entropies));
+                  tacmap::median(final_entropies), dark_successes, dark_sequences, appearance_text);
       std::fflush(stdout);
       if (n > 0 && static_cast<double>(successes) < min_success * static_cast<double>(n))
         below_floor = true;

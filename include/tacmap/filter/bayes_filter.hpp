@@ -15,10 +15,12 @@
 #include <tuple>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "tacmap/angle.hpp"
 #include "tacmap/filter/detail/posterior_kernel.hpp"
 #include "tacmap/grid/concept.hpp"
+#include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/measurement/concept.hpp"
 #include "tacmap/motion/concept.hpp"
@@ -26,16 +28,30 @@
 namespace tacmap {
 
 /// Summary of a belief in the map frame (millimetres; radians for angles).
+///
+/// Over a `latent_grid` (a discrete latent variable such as the object's appearance) every
+/// figure describes the *position* marginal p(x) = sum_h bel(h, x) — where the sensor is,
+/// whatever the hypothesis — and `hypothesis_probability` holds p(h) = sum_x bel(h, x).
 template <int Dimension>
 struct state_estimate {
   using vector_type = Eigen::Matrix<double, Dimension, 1>;
   using matrix_type = Eigen::Matrix<double, Dimension, Dimension>;
-  Eigen::Index map_index = 0;    ///< index of the most probable state (MAP)
+  /// Index of the most probable state (MAP). Latent grids: the most probable position, in the
+  /// block of the most probable hypothesis (`map_hypothesis`).
+  Eigen::Index map_index = 0;
   vector_type map_mm;            ///< the MAP state's coordinates
-  double map_probability = 0.0;  ///< its posterior probability
+  double map_probability = 0.0;  ///< its posterior probability (latent: summed over hypotheses)
   vector_type mean_mm;           ///< posterior mean
   matrix_type covariance_mm2;    ///< posterior covariance
-  double entropy_nats = 0.0;     ///< -sum p log p: 0 when certain, log(N) when uniform
+  /// -sum p log p of the position belief: 0 when certain, log(N) when uniform over N positions.
+  double entropy_nats = 0.0;
+  /// Latent grids: the posterior of each hypothesis (sums to 1; names in the grid's
+  /// `hypothesis_name(h)`). Empty for grids without a latent variable.
+  std::vector<double> hypothesis_probability;
+  /// Latent grids: the most probable hypothesis (0 otherwise). Equal posteriors (e.g. a map
+  /// whose appearances cannot be told apart) show as equal `hypothesis_probability` values;
+  /// the lowest index is named here.
+  Eigen::Index map_hypothesis = 0;
 };
 
 /// What one measurement update reports.
@@ -78,12 +94,13 @@ class bayes_filter {
         scratch_(grid_.size()),
         log_likelihood_(grid_.size()),
         origin_mm_(grid_.state_mm(0)),
-        offsets_mm_(Grid::dimension, grid_.size()) {
+        offsets_mm_(Grid::dimension, position_count(grid_)) {
     TACMAP_ASSERT(grid_.size() > 0 && grid_.size() % (grid_.rows() * grid_.cols()) == 0,
                   "a state_grid's size must be a positive multiple of rows * cols");
     // State coordinates are fixed for the filter's life: cache them (relative to the first
     // state, which keeps them small) so estimate() is two matrix products, not N grid calls.
-    for (Eigen::Index i = 0; i < grid_.size(); ++i)
+    // A latent grid repeats its positions in every hypothesis block: the first block's suffice.
+    for (Eigen::Index i = 0; i < offsets_mm_.cols(); ++i)
       offsets_mm_.col(i) = grid_.state_mm(i) - origin_mm_;
     reset();
   }
@@ -184,32 +201,47 @@ class bayes_filter {
     return {belief_.data() + layer * plane, grid_.rows(), grid_.cols()};
   }
 
-  /// MAP state, mean, covariance and entropy of the belief, in the map frame (mm).
+  /// MAP state, mean, covariance and entropy of the belief, in the map frame (mm); over a
+  /// latent grid, of the position marginal, with each hypothesis's posterior (see
+  /// `state_estimate`).
   [[nodiscard]] estimate_type estimate() const {
     estimate_type e;
+    // The belief over positions: the belief itself, or summed over the hypotheses.
+    const belief_type* positions = &belief_;
+    belief_type marginal;
+    if constexpr (latent_state_grid<Grid>) {
+      marginal = marginal_belief(grid_, belief_);
+      positions = &marginal;
+      e.hypothesis_probability = hypothesis_posterior(grid_, belief_);
+      for (std::size_t h = 1; h < e.hypothesis_probability.size(); ++h)
+        if (e.hypothesis_probability[h] >
+            e.hypothesis_probability[static_cast<std::size_t>(e.map_hypothesis)])
+          e.map_hypothesis = static_cast<Eigen::Index>(h);
+    }
+    const belief_type& p = *positions;
     Eigen::Index best = 0;
-    e.map_probability = static_cast<double>(belief_.maxCoeff(&best));
-    e.map_index = best;
-    e.map_mm = grid_.state_mm(best);
+    e.map_probability = static_cast<double>(p.maxCoeff(&best));
+    e.map_index = best + e.map_hypothesis * p.size();
+    e.map_mm = grid_.state_mm(e.map_index);
     // Moments of the cached coordinates relative to the grid's first state: small numbers, so
     // E[o o^T] - E[o] E[o]^T does not cancel catastrophically even on a far-from-origin map.
     if constexpr (has_circular_coordinates<Grid>) {
-      circular_moments(e);
+      circular_moments(p, e);
     } else {
       typename estimate_type::vector_type mean_offset = estimate_type::vector_type::Zero();
       typename estimate_type::matrix_type second = estimate_type::matrix_type::Zero();
-      for (Eigen::Index i = 0; i < grid_.size(); ++i) {
-        const double p = static_cast<double>(belief_(i));
+      for (Eigen::Index i = 0; i < p.size(); ++i) {
+        const double w = static_cast<double>(p(i));
         const auto o = offsets_mm_.col(i);
-        mean_offset += p * o;
-        second.noalias() += (p * o) * o.transpose();
+        mean_offset += w * o;
+        second.noalias() += (w * o) * o.transpose();
       }
       e.covariance_mm2 = second - mean_offset * mean_offset.transpose();
       e.mean_mm = origin_mm_ + mean_offset;
     }
     // 0 log 0 = 0: the tiny offset keeps log finite where p = 0 without changing other terms.
     const scalar_type tiny = std::numeric_limits<scalar_type>::min();
-    e.entropy_nats = -static_cast<double>((belief_ * (belief_ + tiny).log()).sum());
+    e.entropy_nats = -static_cast<double>((p * (p + tiny).log()).sum());
     return e;
   }
 
@@ -225,13 +257,14 @@ class bayes_filter {
   // into [-pi, pi) before the (co)variances are taken — a belief split between -179 and +179
   // degrees has mean 180 degrees and a small spread, not mean 0 and a huge one. Two passes: the
   // mean first, then the wrapped deviations.
-  void circular_moments(estimate_type& e) const requires has_circular_coordinates<Grid> {
+  void circular_moments(const belief_type& belief,
+                        estimate_type& e) const requires has_circular_coordinates<Grid> {
     constexpr int dim = Grid::dimension;
     typename estimate_type::vector_type mean_offset = estimate_type::vector_type::Zero();
     std::array<double, static_cast<std::size_t>(dim)> sum_cos{};
     std::array<double, static_cast<std::size_t>(dim)> sum_sin{};
-    for (Eigen::Index i = 0; i < grid_.size(); ++i) {
-      const double p = static_cast<double>(belief_(i));
+    for (Eigen::Index i = 0; i < belief.size(); ++i) {
+      const double p = static_cast<double>(belief(i));
       if (p == 0.0) continue;
       const auto o = offsets_mm_.col(i);
       for (int k = 0; k < dim; ++k) {
@@ -252,8 +285,8 @@ class bayes_filter {
     e.mean_mm = mean;
     typename estimate_type::matrix_type cov = estimate_type::matrix_type::Zero();
     typename estimate_type::vector_type d;
-    for (Eigen::Index i = 0; i < grid_.size(); ++i) {
-      const double p = static_cast<double>(belief_(i));
+    for (Eigen::Index i = 0; i < belief.size(); ++i) {
+      const double p = static_cast<double>(belief(i));
       if (p == 0.0) continue;
       const auto o = offsets_mm_.col(i);
       for (int k = 0; k < dim; ++k)
@@ -295,6 +328,14 @@ class bayes_filter {
     scratch_ *= static_cast<scalar_type>(1.0 / total);
     belief_.swap(scratch_);
     return {std::log(total)};
+  }
+
+  // Positions the estimate describes: the base grid's states for latent grids, else all states.
+  static Eigen::Index position_count(const Grid& grid) {
+    if constexpr (latent_state_grid<Grid>)
+      return grid.hypothesis_size();
+    else
+      return grid.size();
   }
 
   Grid grid_;

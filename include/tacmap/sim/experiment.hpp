@@ -24,6 +24,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -37,12 +38,15 @@
 
 #include "tacmap/descriptor/dense_sift.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/grid/pose_grid.hpp"
 #include "tacmap/image.hpp"
+#include "tacmap/measurement/appearance_likelihood.hpp"
 #include "tacmap/measurement/descriptor_likelihood.hpp"
 #include "tacmap/measurement/ncc_likelihood.hpp"
 #include "tacmap/measurement/rotated_descriptor_likelihood.hpp"
+#include "tacmap/motion/latent_motion.hpp"
 #include "tacmap/motion/odometry_gaussian.hpp"
 #include "tacmap/motion/pose_odometry_gaussian.hpp"
 #include "tacmap/sim/protocol.hpp"
@@ -59,6 +63,21 @@ enum class measurement_kind {
   classic,  ///< "classic_sift": 4 x 4 x 8 dense SIFT, same eq. (1)-(2)
   ncc,      ///< "ncc": normalised cross-correlation baseline (ncc_likelihood)
 };
+
+/// How the filter relates the map's brightness to the object's height (README, "The photo is
+/// not the touch").
+enum class appearance_handling {
+  /// "fixed": raised parts are assumed to look bright (the paper's gecko; every model before
+  /// the appearance hypotheses). Fails completely on objects whose raised parts are darker.
+  fixed,
+  /// "latent": both relations are hypotheses of the filter (`appearance_likelihood` over a
+  /// `latent_grid`), weighed by the touches' evidence; nothing needs to be known of the object.
+  latent,
+};
+
+[[nodiscard]] inline const char* to_string(appearance_handling a) {
+  return a == appearance_handling::fixed ? "fixed" : "latent";
+}
 
 [[nodiscard]] inline const char* to_string(measurement_kind k) {
   switch (k) {
@@ -108,6 +127,29 @@ struct localization_config {
   /// simulator seed) instead of 0; the odometry is then reported in the sensor's frame.
   bool random_orientation = false;
   double turn_sigma_rad = 0.0873;  ///< pose motion: turn noise (headings > 0)
+  /// How the map's brightness relates to height (see `appearance_handling`).
+  appearance_handling appearance = appearance_handling::fixed;
+  /// `latent` only: probability that the appearance hypothesis changes between touches
+  /// (`latent_motion_params::switch_probability`); 0 = a property of the whole object.
+  double appearance_switch = 0.0;
+
+  /// Throws std::invalid_argument for settings that contradict each other, naming both.
+  void validate() const {
+    if (appearance_switch != 0.0 && appearance != appearance_handling::latent)
+      detail::fail("localization_config: appearance_switch = ", appearance_switch,
+                   " needs appearance = latent (it switches between appearance hypotheses), but "
+                   "appearance = ",
+                   to_string(appearance), "; set appearance to latent or the switch to 0");
+    if (!(std::isfinite(appearance_switch) && appearance_switch >= 0.0 && appearance_switch <= 0.5))
+      detail::fail("localization_config: appearance_switch = ", appearance_switch,
+                   "; expected a probability in [0, 0.5] (two hypotheses)");
+  }
+
+  /// The appearance hypotheses this configuration's filter holds.
+  [[nodiscard]] std::vector<tacmap::appearance> appearances() const {
+    if (appearance == appearance_handling::latent) return both_appearances();
+    return {tacmap::appearance::as_photographed};
+  }
 
   /// A short name for tables: "sift_lite/all_pairs/inverse/per_window", with "/tau=0.5" when
   /// `tau` is set.
@@ -124,6 +166,12 @@ struct localization_config {
       t << *tau;
       out += "/tau=" + t.str();
     }
+    if (appearance != appearance_handling::fixed) out += std::string("/") + to_string(appearance);
+    if (appearance_switch > 0.0) {
+      std::ostringstream t;
+      t << appearance_switch;
+      out += "/switch=" + t.str();
+    }
     return out;
   }
 };
@@ -139,17 +187,23 @@ struct touch_record {
   double error_mm = 0.0;        ///< distance between the two
   double true_theta_rad = 0.0;  ///< the sensor's heading on the map (0 unless random)
   double map_theta_rad = 0.0;   ///< the MAP state's heading (pose grids; else 0 = known)
-  double entropy_nats = 0.0;    ///< the belief's entropy after this touch
-  bool accepted = true;         ///< false: preprocess rejected the frame, no update
+  double entropy_nats = 0.0;    ///< the belief's entropy after this touch (positions)
+  /// Posterior of each appearance hypothesis after this touch (`localization_config::
+  /// appearances()` order; one value 1 for `fixed`).
+  std::vector<double> appearance_probability;
+  bool accepted = true;  ///< false: preprocess rejected the frame, no update
   frame_rejection rejection = frame_rejection::none;
 };
 
 /// One sequence's run. The images are filled only when asked for (`keep_images`).
 struct sequence_result {
   std::size_t sequence = 0;
+  /// The object's relation this sequence (the scenario's polarity, drawn per sequence when
+  /// random): true when its raised parts look darker in the photograph.
+  bool raised_dark = false;
   std::vector<touch_record> touches;
   std::vector<image<float>> tactile_images;  ///< preprocessed, map scale (empty when rejected)
-  std::vector<image<float>> beliefs;         ///< belief image after each touch
+  std::vector<image<float>> beliefs;         ///< position belief after each touch (all hypotheses)
 };
 
 /// First touch (1-based) from which every error is below `threshold_mm`; empty when the last
@@ -283,76 +337,148 @@ class configured_rotated_measurement {
 
 /// One map and one configuration: the grid, the filter (with its measurement model built once)
 /// and the simulator's relief. `run` replays a sequence from a uniform belief.
+///
+/// The object's relief comes from the protocol's image with the scenario's polarity
+/// (`object_relief`): raised parts bright (+1) or dark (-1), drawn per sequence when the
+/// polarity is random. Each polarity has its own relief and camera map (the shading of its
+/// walls), so the experiment keeps one filter per polarity it meets (at most two).
 class localization_experiment {
  public:
-  using filter_type = bayes_filter<planar_grid<float>, odometry_gaussian, configured_measurement>;
+  using filter_type =
+      bayes_filter<latent_grid<planar_grid<float>>, latent_motion<odometry_gaussian>,
+                   appearance_likelihood<configured_measurement>>;
   using pose_filter_type =
-      bayes_filter<pose_grid<float>, pose_odometry_gaussian, configured_rotated_measurement>;
+      bayes_filter<latent_grid<pose_grid<float>>, latent_motion<pose_odometry_gaussian>,
+                   appearance_likelihood<configured_rotated_measurement>>;
 
   /// Throws std::invalid_argument for a protocol whose map is empty or smaller than the sensor's
-  /// window, or for out-of-range configuration values (named by the component that checks them).
+  /// window, or for out-of-range or contradictory configuration values (named by the component
+  /// that checks them).
   localization_experiment(const touch_protocol& protocol, localization_config config)
       : protocol_(&protocol),
         config_(std::move(config)),
         window_(checked_window(protocol, config_)),
-        relief_(protocol.relief_mm()),
-        visual_map_(camera_image(protocol.map, relief_, protocol.mm_per_px, config_.scenario,
-                                 scenario_seed(config_.simulator_seed, 0))),
         margin_px_(config_.scenario.moves_sensor() || config_.random_orientation
                        ? margin_px(protocol, config_)
-                       : 0),
-        pressed_relief_(margin_px_ > 0 ? padded(relief_, margin_px_) : relief_) {
+                       : 0) {
+    config_.validate();
+    config_.scenario.validate();
     config_.preprocessing.mm_per_px = protocol.mm_per_px;
-    const planar_grid<float> positions(protocol.map_size(), protocol.mm_per_px, window_);
     if (config_.headings < 0)
       detail::fail("localization_config: headings = ", config_.headings,
                    "; expected 0 (known orientation) or the number of headings of a pose grid");
-    if (config_.headings == 0) {
-      filter_.emplace(
-          positions,
-          odometry_gaussian({.sigma_mm = config_.motion_sigma_mm, .k = config_.motion_k}),
-          configured_measurement(config_, visual_map_, window_));
-    } else {
-      const pose_grid<float> grid(positions, config_.headings);
-      pose_filter_.emplace(grid,
-                           pose_odometry_gaussian({.sigma_mm = config_.motion_sigma_mm,
-                                                   .k = config_.motion_k,
-                                                   .sigma_rad = config_.turn_sigma_rad}),
-                           configured_rotated_measurement(config_, visual_map_, grid));
-    }
+    const relief_polarity polarity = config_.scenario.polarity;
+    if (polarity != relief_polarity::dark_raised) build_variant(0);
+    if (polarity != relief_polarity::bright_raised) build_variant(1);
   }
 
   [[nodiscard]] const localization_config& config() const { return config_; }
-  /// The planar filter (config().headings == 0).
+  /// The planar filter (config().headings == 0) of the scenario's first polarity (bright
+  /// raised, unless the scenario's polarity is dark_raised).
   [[nodiscard]] const filter_type& filter() const {
-    TACMAP_ASSERT(filter_.has_value(), "filter(): this experiment localizes over (x, y, theta)");
-    return *filter_;
+    TACMAP_ASSERT(first().filter.has_value(),
+                  "filter(): this experiment localizes over (x, y, theta)");
+    return *first().filter;
   }
-  /// The (x, y, theta) filter (config().headings > 0).
+  /// The (x, y, theta) filter (config().headings > 0), as `filter()`.
   [[nodiscard]] const pose_filter_type& pose_filter() const {
-    TACMAP_ASSERT(pose_filter_.has_value(), "pose_filter(): this experiment is planar");
-    return *pose_filter_;
+    TACMAP_ASSERT(first().pose_filter.has_value(), "pose_filter(): this experiment is planar");
+    return *first().pose_filter;
   }
   /// The map the measurement model matches against: the protocol's image, or what the
-  /// scenario's camera makes of it.
-  [[nodiscard]] const image<float>& visual_map() const { return visual_map_; }
+  /// scenario's camera makes of it (for the first polarity, as `filter()`).
+  [[nodiscard]] const image<float>& visual_map() const { return first().visual_map; }
+  /// The relief the sensor presses (first polarity), mm.
+  [[nodiscard]] const image<float>& relief_mm() const { return first().relief; }
 
   /// Replays sequence `index` of the protocol. `keep_images`: also return every preprocessed
   /// tactile image and belief image. Throws std::invalid_argument for an index out of range.
   [[nodiscard]] sequence_result run(std::size_t index, bool keep_images = false) {
-    if (filter_) return run_on(*filter_, index, keep_images);
-    return run_on(*pose_filter_, index, keep_images);
-  }
-
- private:
-  template <class Filter>
-  sequence_result run_on(Filter& filter, std::size_t index, bool keep_images) {
-    constexpr bool pose = Filter::grid_type::dimension == 3;
     if (index >= protocol_->sequences.size())
       detail::fail("localization_experiment::run: sequence ", index,
                    " does not exist; expected 0 .. ",
                    protocol_->sequences.size() == 0 ? 0 : protocol_->sequences.size() - 1,
                    " (the protocol has ", protocol_->sequences.size(), " sequences)");
+    bool dark = config_.scenario.polarity == relief_polarity::dark_raised;
+    if (config_.scenario.polarity == relief_polarity::random) {
+      // Its own stream: the other draws do not change with the polarity's.
+      sim_rng polarity_rng(scenario_seed(config_.simulator_seed ^ 0xA0761D6478BD642FULL, index));
+      dark = polarity_rng.uniform() < 0.5;
+    }
+    variant& v = *variants_[dark ? 1 : 0];
+    sequence_result result = v.filter ? run_on(*v.filter, v, index, keep_images)
+                                      : run_on(*v.pose_filter, v, index, keep_images);
+    result.raised_dark = dark;
+    return result;
+  }
+
+ private:
+  // Everything that depends on the object's polarity: its relief, the camera's map of it, and
+  // the filter whose measurement model was built from that map.
+  struct variant {
+    image<float> relief;                // mm, the object's height
+    image<float> visual_map;            // what the camera shows (the protocol's image when ideal)
+    image<float> pressed_relief;        // relief padded by margin_px_ for moved or turned presses
+    std::optional<filter_type> filter;  // headings == 0
+    std::optional<pose_filter_type> pose_filter;  // headings > 0
+  };
+
+  [[nodiscard]] const variant& first() const {
+    return variants_[0] ? *variants_[0] : *variants_[1];
+  }
+
+  void build_variant(std::size_t which) {
+    variant v;
+    const int sign = which == 0 ? 1 : -1;
+    v.relief = object_relief(protocol_->map, protocol_->relief, config_.scenario, sign,
+                             scenario_seed(config_.simulator_seed ^ 0x2545F4914F6CDD1DULL, 0));
+    v.visual_map = camera_image(protocol_->map, v.relief, protocol_->mm_per_px, config_.scenario,
+                                scenario_seed(config_.simulator_seed, 0));
+    v.pressed_relief = margin_px_ > 0 ? padded(v.relief, margin_px_) : v.relief;
+    const planar_grid<float> positions(protocol_->map_size(), protocol_->mm_per_px, window_);
+    const auto appearances = config_.appearances();
+    const auto names = appearance_names(appearances);
+    const latent_motion_params switching{.switch_probability = config_.appearance_switch};
+    if (config_.headings == 0) {
+      v.filter.emplace(
+          latent_grid<planar_grid<float>>(positions, names),
+          latent_motion<odometry_gaussian>(
+              odometry_gaussian({.sigma_mm = config_.motion_sigma_mm, .k = config_.motion_k}),
+              switching),
+          appearance_likelihood<configured_measurement>(
+              configured_measurement(config_, v.visual_map, window_), appearances));
+    } else {
+      const pose_grid<float> grid(positions, config_.headings);
+      v.pose_filter.emplace(
+          latent_grid<pose_grid<float>>(grid, names),
+          latent_motion<pose_odometry_gaussian>(
+              pose_odometry_gaussian({.sigma_mm = config_.motion_sigma_mm,
+                                      .k = config_.motion_k,
+                                      .sigma_rad = config_.turn_sigma_rad}),
+              switching),
+          appearance_likelihood<configured_rotated_measurement>(
+              configured_rotated_measurement(config_, v.visual_map, grid), appearances));
+    }
+    variants_[which].emplace(std::move(v));
+  }
+
+  // The belief over positions: summed over the appearance hypotheses and, for pose grids, over
+  // the headings.
+  template <class Filter>
+  static image<float> position_image(const Filter& filter) {
+    const auto& grid = filter.grid();
+    const auto marginal = marginal_belief(grid, filter.belief());
+    const Eigen::Index plane = grid.rows() * grid.cols();
+    image<float> out = Eigen::Map<const image<float>>(marginal.data(), grid.rows(), grid.cols());
+    for (Eigen::Index layer = 1; layer * plane < marginal.size(); ++layer)
+      out +=
+          Eigen::Map<const image<float>>(marginal.data() + layer * plane, grid.rows(), grid.cols());
+    return out;
+  }
+
+  template <class Filter>
+  sequence_result run_on(Filter& filter, const variant& v, std::size_t index, bool keep_images) {
+    constexpr bool pose = Filter::grid_type::dimension == 3;
     const touch_sequence& sequence = protocol_->sequences[index];
     // Each sequence gets its own noise stream, fixed by (seed, index): runs are reproducible
     // whatever order or subset of sequences is run.
@@ -362,7 +488,7 @@ class localization_experiment {
     // The relief pressed on, padded (edge heights continued) when the scenario moves the
     // sensor, so that a shifted or turned footprint near the map's border still lies on it.
     const double offset_mm = static_cast<double>(margin_px_) * protocol_->mm_per_px;
-    tactile_simulator simulator(pressed_relief_,
+    tactile_simulator simulator(v.pressed_relief,
                                 {protocol_->map_size().width + 2 * margin_px_,
                                  protocol_->map_size().height + 2 * margin_px_},
                                 protocol_->mm_per_px, sp);
@@ -440,17 +566,11 @@ class localization_experiment {
       rec.true_theta_rad = heading;
       if constexpr (pose) rec.map_theta_rad = est.map_mm(2);
       rec.entropy_nats = est.entropy_nats;
+      rec.appearance_probability = est.hypothesis_probability;
       result.touches.push_back(rec);
       if (keep_images) {
         result.tactile_images.push_back(rec.accepted ? pre.pixels : image<float>{});
-        if constexpr (pose) {  // the position marginal: the belief summed over headings
-          image<float> marginal = filter.belief_image(0);
-          for (Eigen::Index a = 1; a < filter.grid().angle_count(); ++a)
-            marginal += filter.belief_image(a);
-          result.beliefs.push_back(marginal);
-        } else {
-          result.beliefs.push_back(filter.belief_image());
-        }
+        result.beliefs.push_back(position_image(filter));
       }
     }
     return result;
@@ -502,12 +622,8 @@ class localization_experiment {
   const touch_protocol* protocol_;
   localization_config config_;
   pixel_size window_;
-  image<float> relief_;
-  image<float> visual_map_;
   Eigen::Index margin_px_;
-  image<float> pressed_relief_;
-  std::optional<filter_type> filter_;            // headings == 0
-  std::optional<pose_filter_type> pose_filter_;  // headings > 0
+  std::array<std::optional<variant>, 2> variants_;  // [0]: raised bright, [1]: raised dark
 };
 
 }  // namespace tacmap

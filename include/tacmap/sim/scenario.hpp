@@ -16,17 +16,32 @@
 //  * The sensor itself: more read-out noise, gain spread and dead cells than a new array, and a
 //    foam cover that spreads load further (those are `simulator_params`; `realistic_sensor`).
 //
-// `scenario_params` holds the first three groups; `scenario_params::realistic()` and
-// `realistic_sensor()` give values chosen from the physics of the paper's setup, each justified
-// next to it, BEFORE measuring any model with them (README, "Localization results").
-// Every effect is zero in the default (ideal) scenario, which leaves frames and maps
-// bit-identical to a run without a scenario.
+// Beyond the paper's gecko (a light print raised over a dark base): a photograph does not say
+// how an object's brightness relates to its height. A tactile image measures height, a photo
+// albedo x illumination, and the relation between them is the object's own:
+//
+//  * Raised parts may be brighter (the gecko) or darker (black rubber letters on white card,
+//    dark coins on a light tray) than their surroundings: `polarity`, and `object_relief`,
+//    which builds the pressed relief from the photo under either sign.
+//  * Both within one object (a two-tone moulded part, a label over part of a relief):
+//    `mixed_polarity`.
+//  * Ink printed on a flat face has edges in the photo and none under the finger:
+//    `ink_coverage`, `ink_contrast` (camera map only, never the relief).
+//  * A relief of one colour shows only through its shading: `albedo_contrast`.
+//
+// `scenario_params` holds these groups; `scenario_params::realistic()`,
+// `scenario_params::unknown_object()` and `realistic_sensor()` give values chosen from the
+// physics of the setup, each justified next to it, BEFORE measuring any model with them
+// (README, "Localization results"). Every effect is zero in the default (ideal) scenario, which
+// leaves frames and maps bit-identical to a run without a scenario.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <numbers>
+#include <vector>
 
 #include "tacmap/image.hpp"
 #include "tacmap/sim/random.hpp"
@@ -34,8 +49,28 @@
 
 namespace tacmap {
 
-/// Simulation scenario: how the camera's map, the object's registration and each press depart
-/// from the ideal (see the file comment). All zero (ideal) by default.
+/// How the object's height shows in its photograph (see the file comment).
+enum class relief_polarity {
+  bright_raised,  ///< "bright": raised parts are brighter than their surroundings (the gecko)
+  dark_raised,    ///< "dark": raised parts are darker (black letters on white card)
+  random,         ///< "random": either, drawn per sequence by the experiment (an unknown object)
+};
+
+/// The names tacmap-evaluate's --polarity takes.
+[[nodiscard]] inline const char* to_string(relief_polarity p) {
+  switch (p) {
+    case relief_polarity::bright_raised:
+      return "bright";
+    case relief_polarity::dark_raised:
+      return "dark";
+    case relief_polarity::random:
+      return "random";
+  }
+  return "?";
+}
+
+/// Simulation scenario: how the camera's map, the object's relief and registration, and each
+/// press depart from the ideal (see the file comment). Every effect off (ideal) by default.
 struct scenario_params {
   // --- The visual map is a camera image (applied once per map, fixed by the seed) ---
   /// Multiplicative surface texture of the print (layer lines, filament colour, dust): relative
@@ -58,6 +93,25 @@ struct scenario_params {
   double camera_noise = 0.0;
   /// Tone curve: the map stores linear intensity^(1 / camera_gamma) (sRGB ~ 2.2; 1 = linear).
   double camera_gamma = 1.0;
+  /// Printed ink unrelated to height (text, logos, markings): the fraction of the map's area
+  /// covered by random strokes (5-30 px long, 1-3 px wide, random direction), fixed by the
+  /// seed. Changes the camera map's albedo only: ink has photo edges and no touch edges.
+  double ink_coverage = 0.0;
+  /// Opacity of that ink: half the strokes pull the albedo towards black, half towards white,
+  /// by this fraction (1 = opaque black or white ink).
+  double ink_contrast = 0.5;
+  /// How much of the protocol image's brightness variation the object's albedo keeps:
+  /// albedo = mean + albedo_contrast x (image - mean). 0 = an object of one colour, whose
+  /// relief shows in the photo only through shading.
+  double albedo_contrast = 1.0;
+
+  // --- How the relief relates to the photo's brightness (object_relief) ---
+  /// Whether raised parts are brighter or darker than their surroundings, or either per
+  /// sequence. bright_raised keeps the relief the protocol's (`relief_from_image` of the map).
+  relief_polarity polarity = relief_polarity::bright_raised;
+  /// Fraction of the map's area, in smooth random regions fixed per map by the seed, where the
+  /// height-brightness relation is the opposite of the sequence's polarity (a two-tone part).
+  double mixed_polarity = 0.0;
 
   // --- Registration of the object to the map (drawn once per sequence) ---
   /// Shift of the object against the map, mm (its direction is drawn per sequence).
@@ -109,10 +163,40 @@ struct scenario_params {
     return s;
   }
 
+  /// A photograph of an object we know nothing about: the realistic scenario, plus the ways the
+  /// object's height may relate to its picture. Values argued before any measurement.
+  [[nodiscard]] static scenario_params unknown_object() {
+    scenario_params s = realistic();
+    // A photo alone does not tell whether raised parts are lighter (a light print on a dark
+    // base) or darker (dark rubber or embossed letters on a light card) — both are common, so
+    // each sequence's object is either, with equal odds.
+    s.polarity = relief_polarity::random;
+    // Many objects are two-tone somewhere: a light moulded case with dark rubber keys or feet,
+    // a contrasting inlay, a label stuck over part of a relief. A fifth of the area is a
+    // noticeable minority, not so much that the "opposite" relation becomes the main one.
+    s.mixed_polarity = 0.2;
+    // Printed text, logos and markings typically cover a few percent of a product's face (a
+    // logo and a line of text on a ~14 cm object: ~5 %). Mid-tone print on a coloured body is
+    // more common than pure black on white: 40 % of the way to black or white.
+    s.ink_coverage = 0.05;
+    s.ink_contrast = 0.4;
+    // The object's colours keep their full contrast: an object of one colour (relief seen only
+    // through shading) is a different question — can a photo show the relief at all — which
+    // --albedo-contrast asks separately; mixing it in would confound it with polarity.
+    s.albedo_contrast = 1.0;
+    return s;
+  }
+
   /// True when some camera effect is on (the map differs from the protocol's image).
   [[nodiscard]] bool changes_map() const {
     return albedo_variation > 0.0 || illumination_gradient > 0.0 || shading > 0.0 ||
-           camera_blur_px > 0.0 || camera_noise > 0.0 || camera_gamma != 1.0;
+           camera_blur_px > 0.0 || camera_noise > 0.0 || camera_gamma != 1.0 ||
+           ink_coverage > 0.0 || albedo_contrast != 1.0;
+  }
+  /// True when the relief pressed may differ from the protocol's (`relief_from_image` of the
+  /// map): raised parts darker (always or per sequence), or mixed-polarity regions.
+  [[nodiscard]] bool changes_relief() const {
+    return polarity != relief_polarity::bright_raised || mixed_polarity > 0.0;
   }
   /// True when the sensor's pose or press departs from the protocol's.
   [[nodiscard]] bool moves_sensor() const {
@@ -134,6 +218,17 @@ struct scenario_params {
     in("camera_blur_px", camera_blur_px, 0.0, 100.0, " map pixels (Gaussian sigma)");
     in("camera_noise", camera_noise, 0.0, 1.0, " (standard deviation, intensity of 1)");
     in("camera_gamma", camera_gamma, 0.1, 10.0, " (2.2 for sRGB, 1 for linear)");
+    in("ink_coverage", ink_coverage, 0.0, 1.0,
+       " (fraction of the map's area covered by ink strokes, e.g. 0.05)");
+    in("ink_contrast", ink_contrast, 0.0, 1.0, " (ink opacity towards black or white; 1 = opaque)");
+    in("albedo_contrast", albedo_contrast, 0.0, 1.0,
+       " (fraction of the image's brightness variation the albedo keeps; 1 = all)");
+    if (polarity != relief_polarity::bright_raised && polarity != relief_polarity::dark_raised &&
+        polarity != relief_polarity::random)
+      detail::fail("scenario_params: polarity = ", static_cast<int>(polarity),
+                   "; expected relief_polarity::bright_raised, dark_raised or random");
+    in("mixed_polarity", mixed_polarity, 0.0, 1.0,
+       " (fraction of the map's area with the opposite polarity, e.g. 0.2)");
     in("registration_shift_mm", registration_shift_mm, 0.0, 50.0, " millimetres");
     in("registration_rotation_deg", registration_rotation_deg, 0.0, 45.0, " degrees");
     in("orientation_jitter_deg", orientation_jitter_deg, 0.0, 45.0,
@@ -160,16 +255,153 @@ struct scenario_params {
 }
 
 /// The named scenarios of tacmap-evaluate's --scenario.
-enum class scenario_kind { ideal, realistic };
+enum class scenario_kind {
+  ideal,      ///< "ideal": scenario_params{}, the paper's sensor new
+  realistic,  ///< "realistic": scenario_params::realistic(), realistic_sensor()
+  unknown,    ///< "unknown": scenario_params::unknown_object(), realistic_sensor()
+};
 
 [[nodiscard]] inline const char* to_string(scenario_kind k) {
-  return k == scenario_kind::ideal ? "ideal" : "realistic";
+  switch (k) {
+    case scenario_kind::ideal:
+      return "ideal";
+    case scenario_kind::realistic:
+      return "realistic";
+    case scenario_kind::unknown:
+      return "unknown";
+  }
+  return "?";
+}
+
+namespace detail::simulation {
+
+/// Smooth random weight in [0, 1] per pixel, about `fraction` of the area near 1 and the rest
+/// near 0, deterministic for `seed`: the regions of opposite polarity.
+inline image<float> mixed_polarity_weight(Eigen::Index rows, Eigen::Index cols, double fraction,
+                                          std::uint64_t seed) {
+  // Regions of about 15-30 px (17-34 mm at the paper's 1.13 mm per px): the size of a label, a
+  // button or an inlay, comparable to the 48 x 20 mm array, so a touch may straddle one.
+  constexpr double region_sigma_px = 6.0;
+  // Transitions over ~4 px: a moulded or printed boundary is sharp, but a hard step in the
+  // weight would be a relief edge where the object has none.
+  constexpr double transition_sigma_px = 1.5;
+  if (rows <= 0 || cols <= 0) return image<float>(rows, cols);
+  // Noise on a padded field, cropped: the blur's renormalised border taps would otherwise give
+  // border pixels a larger spread and so more of the extreme values the quantile picks.
+  const auto pad = static_cast<Eigen::Index>(std::ceil(3.0 * region_sigma_px));
+  std::uint64_t s = seed ^ 0x4D49584544504F4CULL;  // own stream, apart from camera_image's
+  sim_rng rng(splitmix64(s));
+  image<float> noise(rows + 2 * pad, cols + 2 * pad);
+  for (Eigen::Index i = 0; i < noise.size(); ++i)
+    noise.data()[i] = static_cast<float>(rng.normal());
+  gaussian_blur(noise, region_sigma_px);
+  const image<float> field = noise.block(pad, pad, rows, cols);
+  // Threshold at the quantile that leaves `fraction` of the pixels above it.
+  const auto n = static_cast<std::size_t>(field.size());
+  const auto flipped = static_cast<std::size_t>(std::llround(fraction * static_cast<double>(n)));
+  image<float> weight = image<float>::Zero(rows, cols);
+  if (flipped >= n) {
+    weight.setOnes();
+  } else if (flipped > 0) {
+    std::vector<float> values(field.data(), field.data() + field.size());
+    const auto kth = values.begin() + static_cast<std::ptrdiff_t>(n - flipped);
+    std::nth_element(values.begin(), kth, values.end());
+    const float threshold = *kth;  // the smallest of the `flipped` largest values
+    weight = (field >= threshold).cast<float>();
+  }
+  gaussian_blur(weight, transition_sigma_px);
+  return weight;
+}
+
+/// Printed ink strokes covering `coverage` of a rows x cols map: per pixel -1 (no ink), 0 (dark
+/// ink) or 1 (light ink). Strokes are drawn from `rng` until the coverage is reached.
+inline image<float> ink_layer(Eigen::Index rows, Eigen::Index cols, double coverage, sim_rng& rng) {
+  // Strokes of text, logos and markings at the paper's 1.13 mm per px: 6-34 mm long, 1-3 mm
+  // wide.
+  constexpr double min_length_px = 5.0, max_length_px = 30.0;
+  constexpr double min_width_px = 1.0, max_width_px = 3.0;
+  image<float> ink = image<float>::Constant(rows, cols, -1.0F);
+  const double target = coverage * static_cast<double>(ink.size());
+  if (!(target > 0.0)) return ink;
+  // Centres also fall up to half a stroke beyond the map, so that the border is inked as often
+  // as the middle.
+  const double margin = max_length_px / 2.0;
+  // Enough strokes to cover the map many times over: only reached for coverage ~ 1 on a tiny
+  // map, where stopping a few pixels short is harmless, but a loop must end.
+  const double max_strokes = 1000.0 * (static_cast<double>(ink.size()) + 4.0 * margin * margin);
+  double covered = 0.0;
+  for (double stroke = 0.0; covered < target && stroke < max_strokes; stroke += 1.0) {
+    const double cx = -margin + (static_cast<double>(cols) + 2.0 * margin) * rng.uniform();
+    const double cy = -margin + (static_cast<double>(rows) + 2.0 * margin) * rng.uniform();
+    const double length = min_length_px + (max_length_px - min_length_px) * rng.uniform();
+    const double half_width = 0.5 * (min_width_px + (max_width_px - min_width_px) * rng.uniform());
+    const double angle = std::numbers::pi * rng.uniform();
+    // Alternately dark and light: half the strokes each, whatever their number.
+    const float colour = std::fmod(stroke, 2.0) == 0.0 ? 0.0F : 1.0F;
+    const double dx = 0.5 * length * std::cos(angle), dy = 0.5 * length * std::sin(angle);
+    // Pixels (centres at integer coordinates) within half the width of the segment.
+    const double reach = 0.5 * length + half_width;
+    const auto r0 = std::max<Eigen::Index>(0, static_cast<Eigen::Index>(std::floor(cy - reach)));
+    const auto r1 =
+        std::min<Eigen::Index>(rows - 1, static_cast<Eigen::Index>(std::ceil(cy + reach)));
+    const auto c0 = std::max<Eigen::Index>(0, static_cast<Eigen::Index>(std::floor(cx - reach)));
+    const auto c1 =
+        std::min<Eigen::Index>(cols - 1, static_cast<Eigen::Index>(std::ceil(cx + reach)));
+    for (Eigen::Index r = r0; r <= r1; ++r)
+      for (Eigen::Index c = c0; c <= c1; ++c) {
+        const double px = static_cast<double>(c) - cx, py = static_cast<double>(r) - cy;
+        // Projection onto the segment from -1 (one end) to 1 (the other), clamped.
+        const double t = std::clamp((px * dx + py * dy) / (dx * dx + dy * dy), -1.0, 1.0);
+        if (std::hypot(px - t * dx, py - t * dy) > half_width) continue;
+        if (ink(r, c) < 0.0F) covered += 1.0;
+        ink(r, c) = colour;  // a later stroke prints over an earlier one
+      }
+  }
+  return ink;
+}
+
+}  // namespace detail::simulation
+
+/// The object's height (mm) for a photo `map` (intensities in [0, 1]) under `relief` (how
+/// intensity becomes height: protocol's relief_params), with raised parts brighter (sign = +1)
+/// or darker (sign = -1) than their surroundings, plus the scenario's mixed-polarity regions
+/// (fixed by `seed`).
+///
+/// Sign -1 presses the inverted image (1 - map) through the same `relief_from_image`. In the
+/// mixed regions the weight w in [0, 1] blends the two: relief = w R(opposite) + (1 - w)
+/// R(this sign). Where w is near 0.5, on the regions' borders, the two average out (to half the
+/// height for a binary or continuous relief, whose two signs sum to height_mm): the relief
+/// flattens while the photo keeps its edges — albedo edges with no relief edge, as ink makes.
+/// Sign +1 without mixed polarity is exactly `relief_from_image(map, relief)`.
+/// Throws std::invalid_argument for a sign other than +1 or -1, out-of-range scenario values,
+/// or what `relief_from_image` rejects.
+[[nodiscard]] inline image<float> object_relief(const image<float>& map,
+                                                const relief_params& relief,
+                                                const scenario_params& s, int sign,
+                                                std::uint64_t seed) {
+  s.validate();
+  if (sign != 1 && sign != -1)
+    detail::fail("object_relief: sign = ", sign,
+                 "; expected +1 (raised parts brighter than their surroundings) or -1 (darker)");
+  const auto under = [&](int polarity_sign) {
+    return polarity_sign > 0 ? relief_from_image(map, relief)
+                             : relief_from_image(image<float>(1.0F - map), relief);
+  };
+  image<float> own = under(sign);
+  if (!(s.mixed_polarity > 0.0)) return own;
+  const image<float> opposite = under(-sign);
+  const image<float> w =
+      detail::simulation::mixed_polarity_weight(map.rows(), map.cols(), s.mixed_polarity, seed);
+  return (w.cast<double>() * opposite.cast<double>() +
+          (1.0 - w.cast<double>()) * own.cast<double>())
+      .cast<float>();
 }
 
 /// What the camera sees of an object whose printed colour is `map` (intensities in [0, 1]) and
-/// whose height is `relief_mm` (same size, mm), at `mm_per_px`: albedo texture x illumination x
-/// shading, then blur, noise and the tone curve, clamped to [0, 1]. Deterministic for `seed`.
-/// Returns `map` unchanged when `!params.changes_map()`.
+/// whose height is `relief_mm` (same size, mm), at `mm_per_px`: the albedo (the map's contrast
+/// scaled by `albedo_contrast`, printed ink over it, times the surface texture) x illumination
+/// x shading, then blur, noise and the tone curve, clamped to [0, 1]. Deterministic for
+/// `seed`. Returns `map` unchanged when `!params.changes_map()`.
 [[nodiscard]] inline image<float> camera_image(const image<float>& map,
                                                const image<float>& relief_mm, double mm_per_px,
                                                const scenario_params& params, std::uint64_t seed) {
@@ -186,8 +418,27 @@ enum class scenario_kind { ideal, realistic };
   sim_rng texture_rng(splitmix64(s));
   sim_rng light_rng(splitmix64(s));
   sim_rng noise_rng(splitmix64(s));
+  sim_rng ink_rng(splitmix64(s));  // drawn after the others: their streams stay as they were
   const Eigen::Index rows = map.rows();
   const Eigen::Index cols = map.cols();
+
+  // The object's own colour before texture: the map's contrast scaled about its mean, with ink
+  // printed over it (ink of opacity ink_contrast, black or white, over whatever is beneath).
+  // Without either effect it is the map itself, so the realistic scenario's maps stay
+  // bit-identical.
+  image<double> base = map.cast<double>();
+  if (params.albedo_contrast != 1.0) {
+    const double map_mean = base.mean();
+    base = map_mean + params.albedo_contrast * (base - map_mean);
+  }
+  if (params.ink_coverage > 0.0) {
+    const image<float> ink =
+        detail::simulation::ink_layer(rows, cols, params.ink_coverage, ink_rng);
+    for (Eigen::Index i = 0; i < base.size(); ++i)
+      if (const float colour = ink.data()[i]; colour >= 0.0F)
+        base.data()[i] = (1.0 - params.ink_contrast) * base.data()[i] +
+                         params.ink_contrast * static_cast<double>(colour);
+  }
 
   // Albedo texture: smoothed white noise rescaled to unit standard deviation.
   image<float> texture(rows, cols);
@@ -212,8 +463,7 @@ enum class scenario_kind { ideal, realistic };
   image<float> out(rows, cols);
   for (Eigen::Index r = 0; r < rows; ++r)
     for (Eigen::Index c = 0; c < cols; ++c) {
-      const double albedo = static_cast<double>(map(r, c)) *
-                            std::max(0.0, 1.0 + texture_gain * (texture(r, c) - mean));
+      const double albedo = base(r, c) * std::max(0.0, 1.0 + texture_gain * (texture(r, c) - mean));
       // Position in [-0.5, 0.5] along the gradient's direction (a unit square's projection).
       const double x = (static_cast<double>(c) + 0.5) / static_cast<double>(cols) - 0.5;
       const double y = (static_cast<double>(r) + 0.5) / static_cast<double>(rows) - 0.5;
