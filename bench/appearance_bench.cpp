@@ -42,17 +42,22 @@ void planar_touch_fixed(benchmark::State& state) {
 }
 BENCHMARK(planar_touch_fixed)->Unit(benchmark::kMicrosecond);
 
-void planar_touch_latent(benchmark::State& state) {
+// `both_signs`: the map stored in the contrast basis, both hypotheses from one pass (the
+// default through localization_config); without it, one pass per hypothesis's image over the
+// map's descriptors (`log_likelihood_each`).
+void planar_touch_latent(benchmark::State& state, bool both_signs) {
   const auto map = bench_map();
   const auto grid = planar::paper();
   using model_t = tacmap::descriptor_likelihood<tacmap::classic_sift>;
-  const tacmap::appearance_likelihood<model_t> model(model_t({}, map, grid.window_size()));
+  const tacmap::appearance_likelihood<model_t> model(
+      model_t({}, map, grid.window_size(), {.both_signs = both_signs}));
   tacmap::bayes_filter filter(
       tacmap::latent_grid<planar>(grid, model.hypothesis_names()),
       tacmap::latent_motion<tacmap::odometry_gaussian>(tacmap::odometry_gaussian{}), model);
   time_touches(state, filter, map, {.dx_mm = 4.5, .dy_mm = 0.0}, {.dx_mm = -4.5, .dy_mm = 0.0});
 }
-BENCHMARK(planar_touch_latent)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(planar_touch_latent, one_pass, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(planar_touch_latent, pass_per_hypothesis, false)->Unit(benchmark::kMicrosecond);
 
 void pose_touch_fixed(benchmark::State& state) {
   const auto map = bench_map();

@@ -199,8 +199,8 @@ int main(int argc, char** argv) try {
   bool no_gecko = false;
   std::vector<std::string> photos;
   std::vector<std::string> models{"classic_sift"}, pairings{"aligned"}, shapes{"exponential"},
-      features{"per_window"}, appearances{"fixed"};
-  std::vector<double> appearance_switches{0.0};
+      features{"per_window"}, appearances{"latent"};
+  std::vector<double> appearance_switches;  // empty: the configuration's default
   // Signed, so that a negative count is refused rather than wrapped to "all".
   long long sequences = 0;
   std::size_t max_sequences = 0;
@@ -271,13 +271,14 @@ int main(int argc, char** argv) try {
   app.add_option("--shape", shapes, "inverse, exponential")->delimiter(',');
   app.add_option("--features", features, "per_window, shared_dense")->delimiter(',');
   app.add_option("--appearance", appearances,
-                 "how the map's brightness relates to height: fixed (raised = bright, as "
-                 "before), latent (both relations as hypotheses of the filter); "
-                 "comma-separated to compare")
+                 "how the map's brightness relates to height: latent (default: both "
+                 "relations as hypotheses of the filter), fixed (raised = bright, as before), "
+                 "unsigned (unsigned-orientation descriptors), per_patch (each patch with "
+                 "either sign); comma-separated to compare")
       ->delimiter(',');
   app.add_option("--appearance-switch", appearance_switches,
                  "latent appearance: probability that the hypothesis changes between touches "
-                 "(comma-separated to compare; default 0)")
+                 "(comma-separated to compare; default 0.05)")
       ->delimiter(',')
       ->check(CLI::Range(0.0, 0.5));
   app.add_option("--sequences", sequences, "run only the first N sequences of each map (0 = all)");
@@ -460,19 +461,37 @@ int main(int argc, char** argv) try {
       const auto handling = parse_choice<tacmap::appearance_handling>(
           "--appearance", a,
           {{"fixed", tacmap::appearance_handling::fixed},
-           {"latent", tacmap::appearance_handling::latent}});
-      for (const double sw : appearance_switches) {
-        if (sw > 0.0 && handling != tacmap::appearance_handling::latent) {
+           {"latent", tacmap::appearance_handling::latent},
+           {"unsigned", tacmap::appearance_handling::unsigned_gradients},
+           {"per_patch", tacmap::appearance_handling::per_patch}});
+      std::vector<std::optional<double>> switches(appearance_switches.begin(),
+                                                  appearance_switches.end());
+      if (switches.empty()) switches.emplace_back();  // the configuration's default
+      for (const auto& sw : switches) {
+        if (sw && handling != tacmap::appearance_handling::latent) {
           if (appearances.size() == 1)
             throw CLI::ValidationError(
                 "--appearance-switch",
-                csv_number(sw) + " switches between appearance hypotheses, but --appearance " + a +
+                csv_number(*sw) + " switches between appearance hypotheses, but --appearance " + a +
                     " has none; use --appearance latent");
           continue;
         }
         for (auto c : configs) {
           c.appearance = handling;
           c.appearance_switch = sw;
+          const bool descriptor_level =
+              handling == tacmap::appearance_handling::unsigned_gradients ||
+              handling == tacmap::appearance_handling::per_patch;
+          if (descriptor_level && (c.model == tacmap::measurement_kind::ncc || c.headings > 0 ||
+                                   (handling == tacmap::appearance_handling::per_patch &&
+                                    c.pairs == tacmap::pairing::all_pairs))) {
+            std::fprintf(stderr, "tacmap-evaluate: skipping %s with --appearance %s (%s)\n",
+                         c.name().c_str(), a.c_str(),
+                         c.model == tacmap::measurement_kind::ncc ? "no descriptors"
+                         : c.headings > 0                         ? "known orientation only"
+                                                                  : "aligned pairing only");
+            continue;
+          }
           expanded.push_back(c);
         }
       }

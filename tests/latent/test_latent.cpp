@@ -2,6 +2,7 @@
 // bayes_filter::estimate() reports over them.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -10,6 +11,7 @@
 
 #include "descriptor/blob_images.hpp"
 #include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/descriptor/unsigned_orientation.hpp"
 #include "tacmap/tacmap.hpp"
 #include "test_support.hpp"
 
@@ -39,6 +41,17 @@ tacmap::image<float> blob_map(int rows, int cols, unsigned seed) {
   tacmap_test::add_blobs(m, gen, rows * cols / 60, 3.0);
   return m / m.maxCoeff();
 }
+
+// A measurement model without descriptor_likelihood's one-pass hooks (log_likelihood only).
+template <class Model>
+struct plain_model_of {
+  Model inner;
+  using measurement_type = tacmap::image<float>;
+  template <class G>
+  void log_likelihood(const G& g, const measurement_type& z, tacmap::belief_array<G>& out) const {
+    inner.log_likelihood(g, z, out);
+  }
+};
 
 }  // namespace
 
@@ -315,4 +328,90 @@ TEST_CASE("latent_motion: a hypothesis with a vanishing (denormal) mass keeps it
   const auto p = tacmap::hypothesis_posterior(g, out);
   CHECK(p[1] > 0.0);
   CHECK(p[1] < 1e-38);
+}
+
+TEST_CASE("dense_sift::contrast_permutation: the inverted image's descriptors, permuted") {
+  const tacmap::image<float> img = blob_map(42, 18, 9);
+  const tacmap::image<float> inv = tacmap::appearance_transform(img, tacmap::appearance::inverted);
+  const auto check = [&](const auto& d) {
+    const auto perm = d.contrast_permutation();
+    const auto a = d.compute(img);
+    const auto b = d.compute(inv);
+    double worst = 0.0;
+    for (Eigen::Index j = 0; j < a.values.cols(); ++j)
+      for (Eigen::Index i = 0; i < a.values.rows(); ++i)
+        worst =
+            std::max(worst, std::abs(static_cast<double>(
+                                b.values(i, j) - a.values(perm[static_cast<std::size_t>(i)], j))));
+    CHECK(worst < 1e-5);
+    // ... and the image's own descriptors differ from the inverted ones (the test sees a flip).
+    CHECK((a.values - b.values).abs().maxCoeff() > 0.05F);
+  };
+  check(tacmap::sift_lite{});
+  check(tacmap::classic_sift{});
+}
+
+TEST_CASE("descriptor_likelihood both_signs: one pass equals a pass per sign") {
+  const tacmap::image<float> map = blob_map(60, 50, 21);
+  const tacmap::pixel_size window{.width = 18, .height = 42};
+  const planar grid({.width = 50, .height = 60}, 1.0, window);
+  const tacmap::image<float> z = blob_map(42, 18, 3);
+  const tacmap::image<float> z_inv = tacmap::appearance_transform(z, tacmap::appearance::inverted);
+  for (const auto features :
+       {tacmap::window_features::per_window, tacmap::window_features::shared_dense}) {
+    CAPTURE(static_cast<int>(features));
+    using model_t = tacmap::descriptor_likelihood<tacmap::classic_sift>;
+    const model_t plain({}, map, window, {.features = features});
+    const model_t one_pass({}, map, window, {.features = features, .both_signs = true});
+    Eigen::ArrayXf a(grid.size()), b(grid.size()), both(2 * grid.size()), each(2 * grid.size());
+    // The stored basis does not change a single touch's likelihood.
+    plain.log_likelihood(grid, z, a);
+    one_pass.log_likelihood(grid, z, b);
+    CHECK((a - b).abs().maxCoeff() < 1e-3F * a.abs().maxCoeff());
+    // Both signs in one pass = the touch and its inverse, each through the plain model.
+    one_pass.log_likelihood_both_signs(grid, z, both.data());
+    plain.log_likelihood(grid, z_inv, b);
+    CHECK((both.head(grid.size()) - a).abs().maxCoeff() < 1e-3F * a.abs().maxCoeff());
+    CHECK((both.tail(grid.size()) - b).abs().maxCoeff() < 1e-3F * b.abs().maxCoeff());
+    // Without both_signs the same call takes a pass per sign, with the same result.
+    plain.log_likelihood_both_signs(grid, z, each.data());
+    CHECK((each - both).abs().maxCoeff() < 1e-3F * both.abs().maxCoeff());
+    // The signs really differ (the test is not comparing a block with itself).
+    CHECK((both.head(grid.size()) - both.tail(grid.size())).abs().maxCoeff() > 0.1F);
+  }
+}
+
+TEST_CASE("descriptor_likelihood both_signs: settings that cannot work are refused") {
+  const tacmap::image<float> map = blob_map(60, 50, 21);
+  const tacmap::pixel_size window{.width = 18, .height = 42};
+  using model_t = tacmap::descriptor_likelihood<tacmap::sift_lite>;
+  CHECK(message_of([&] {
+          model_t({}, map, window, {.pairs = tacmap::pairing::all_pairs, .both_signs = true});
+        }).find("both_signs = true with pairs = all_pairs") != std::string::npos);
+  CHECK(message_of([&] {
+          model_t({}, map, window,
+                  {.contrast = tacmap::contrast_sign::either_per_patch, .both_signs = true});
+        }).find("both_signs = true with contrast = either_per_patch") != std::string::npos);
+  // A descriptor without a contrast permutation (unsigned orientation is already invariant).
+  using unsigned_t = tacmap::descriptor_likelihood<tacmap::unsigned_orientation<tacmap::sift_lite>>;
+  CHECK(message_of([&] {
+          unsigned_t({}, map, window, {.both_signs = true});
+        }).find("has no contrast_permutation()") != std::string::npos);
+}
+
+TEST_CASE("appearance_likelihood: the one-pass path gives the generic path's likelihoods") {
+  const tacmap::image<float> map = blob_map(60, 50, 13);
+  const tacmap::pixel_size window{.width = 18, .height = 42};
+  const planar positions({.width = 50, .height = 60}, 1.0, window);
+  using model_t = tacmap::descriptor_likelihood<tacmap::sift_lite>;
+  const tacmap::appearance_likelihood<model_t> fast(model_t({}, map, window, {.both_signs = true}));
+  // A model without the one-pass hooks: the generic per-hypothesis loop.
+  using plain_model = plain_model_of<model_t>;
+  const tacmap::appearance_likelihood<plain_model> slow(plain_model{model_t({}, map, window)});
+  const latent g(positions, fast.hypothesis_names());
+  tacmap::belief_array<latent> a(g.size()), b(g.size());
+  const tacmap::image<float> z = blob_map(42, 18, 8);
+  fast.log_likelihood(g, z, a);
+  slow.log_likelihood(g, z, b);
+  CHECK((a - b).abs().maxCoeff() < 1e-3F * b.abs().maxCoeff());
 }

@@ -1,5 +1,6 @@
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -169,4 +170,153 @@ TEST_CASE("descriptor_likelihood rejects bad input with messages naming the valu
   CHECK(tacmap_test::message_of([&] {
           model.log_likelihood(other, random_image(14, 6, 1), ll_other);
         }).find("same map and window") != std::string::npos);
+}
+
+// ---- contrast_sign::either_per_patch ----------------------------------------------------------
+
+namespace {
+
+using tacmap::contrast_sign;
+using tacmap::window_features;
+
+// Raw pixels minus the described image's mean: depends on the image it is computed on, so a
+// window described on its own (per_window) differs from the map's dense field (shared_dense).
+template <bool Euclidean>
+struct image_centred_t : tacmap_test::raw_patch_t<Euclidean> {
+  tacmap::descriptor_field<float> compute(const tacmap::image<float>& img) const {
+    return tacmap_test::raw_patch_t<Euclidean>::compute(img - img.mean());
+  }
+};
+
+// Raw pixels minus each patch's own mean: blind to intensity offsets, patch by patch, so the
+// inversion of a touch cut from an inverted map is the window's own patches exactly.
+struct patch_centred : raw_patch {
+  tacmap::descriptor_field<float> compute(const tacmap::image<float>& img) const {
+    auto f = raw_patch::compute(img);
+    f.values.rowwise() -= f.values.colwise().mean();
+    return f;
+  }
+};
+
+tacmap::image<float> inverted(const tacmap::image<float>& img) {
+  return (img.maxCoeff() + img.minCoeff()) - img;
+}
+
+// Brute force of d(x, z) = sum_m min(||f_{x,m} - g_m||, ||f_{x,m} - g'_m||): g and g' from the
+// touch and its inversion through tactile_descriptors, f_{x,m} per window (the window cut and
+// described on its own) or from the map's dense field. `picked_inverted` / `picked_as_is` count
+// the patch pairs where each sign was strictly the nearer one.
+template <class D>
+Eigen::ArrayXd brute_force_either(const descriptor_likelihood<D>& model, const grid_t& grid,
+                                  const tacmap::image<float>& map, const tacmap::image<float>& z,
+                                  int& picked_as_is, int& picked_inverted) {
+  const auto g = model.tactile_descriptors(z);
+  const auto gi = model.tactile_descriptors(inverted(z));
+  const auto& field = model.map_descriptors();
+  const bool per_window = model.params().features == window_features::per_window;
+  Eigen::ArrayXd d(grid.size());
+  for (Eigen::Index i = 0; i < grid.size(); ++i) {
+    const auto cell = grid.cell(i);
+    tacmap::descriptor_field<float> own;
+    if (per_window)
+      own = model.descriptor().compute(map.block(cell.row, cell.col, z.rows(), z.cols()).eval());
+    double sum = 0.0;
+    for (Eigen::Index m = 0; m < model.patches_per_window(); ++m) {
+      const auto o = model.patch_offset(m);
+      const Eigen::ArrayXd f =
+          per_window ? own.at(o.row, o.col).template cast<double>().eval()
+                     : field.at(cell.row + o.row, cell.col + o.col).template cast<double>().eval();
+      const double a = std::sqrt((f - g.col(m).template cast<double>()).square().sum());
+      const double b = std::sqrt((f - gi.col(m).template cast<double>()).square().sum());
+      picked_as_is += a < b ? 1 : 0;
+      picked_inverted += b < a ? 1 : 0;
+      sum += std::min(a, b);
+    }
+    d(i) = sum;
+  }
+  return d;
+}
+
+}  // namespace
+
+TEST_CASE("either_per_patch: the nearer sign per patch, as a brute force over windows") {
+  const auto map = random_image(34, 28, 21);
+  const grid_t grid({.width = 28, .height = 34}, 1.0, {.width = 6, .height = 14});
+  const auto z = random_image(14, 6, 22);
+  for (const window_features features :
+       {window_features::per_window, window_features::shared_dense}) {
+    CAPTURE(static_cast<int>(features));
+    const descriptor_likelihood_params params{.spacing = 4,
+                                              .features = features,
+                                              .pairs = pairing::aligned,
+                                              .contrast = contrast_sign::either_per_patch};
+    const descriptor_likelihood fast_model(image_centred_t<true>{}, map, grid.window_size(),
+                                           params);
+    const descriptor_likelihood slow_model(image_centred_t<false>{}, map, grid.window_size(),
+                                           params);
+    REQUIRE(fast_model.patches_per_window() == 3);
+    Eigen::ArrayXf fast(grid.size());
+    Eigen::ArrayXf slow(grid.size());
+    fast_model.distances(grid, z, fast);
+    slow_model.distances(grid, z, slow);
+    int as_is = 0;
+    int inv = 0;
+    const Eigen::ArrayXd expected = brute_force_either(fast_model, grid, map, z, as_is, inv);
+    CHECK((fast.cast<double>() - expected).abs().maxCoeff() < 1e-3 * expected.maxCoeff());
+    CHECK((slow.cast<double>() - expected).abs().maxCoeff() < 1e-4 * expected.maxCoeff());
+    // Both signs won somewhere, so the minimum really chose.
+    CHECK(as_is > 0);
+    CHECK(inv > 0);
+    // ... and the result is not the as_is distance.
+    descriptor_likelihood_params plain = params;
+    plain.contrast = contrast_sign::as_is;
+    Eigen::ArrayXf one_sign(grid.size());
+    descriptor_likelihood(image_centred_t<true>{}, map, grid.window_size(), plain)
+        .distances(grid, z, one_sign);
+    CHECK((one_sign - fast).maxCoeff() > 0.1F);
+    CHECK((one_sign - fast).minCoeff() >= -1e-4F);  // a minimum never exceeds either term
+  }
+}
+
+TEST_CASE("either_per_patch ranks a touch cut from the inverted map at its true window") {
+  // The photo's raised parts are dark: the touch is cut from the inverted map. Its inversion is
+  // the window up to an offset, which per-patch centring removes: distance 0 at the truth.
+  const auto map = random_image(60, 50, 25);
+  const tacmap::image<float> touch_map = inverted(map);
+  const grid_t grid({.width = 50, .height = 60}, 1.0, {.width = 18, .height = 42});
+  const tacmap::grid_cell truth{7, 21};
+  const tacmap::image<float> touch = touch_map.block(truth.row, truth.col, 42, 18);
+  for (const window_features features :
+       {window_features::per_window, window_features::shared_dense}) {
+    CAPTURE(static_cast<int>(features));
+    Eigen::ArrayXf ll(grid.size());
+    Eigen::Index best = 0;
+    const descriptor_likelihood either(
+        patch_centred{}, map, grid.window_size(),
+        {.spacing = 9, .features = features, .contrast = contrast_sign::either_per_patch});
+    either.log_likelihood(grid, touch, ll);
+    ll.maxCoeff(&best);
+    CHECK(best == grid.index(truth));
+    // The same touch as it is does not find its window: the contrast reversal is the problem.
+    const descriptor_likelihood as_is(patch_centred{}, map, grid.window_size(),
+                                      {.spacing = 9, .features = features});
+    as_is.log_likelihood(grid, touch, ll);
+    ll.maxCoeff(&best);
+    CHECK(best != grid.index(truth));
+  }
+}
+
+TEST_CASE("either_per_patch is refused with all pairs, naming both settings") {
+  const auto map = random_image(30, 30, 26);
+  const descriptor_likelihood_params params{.pairs = pairing::all_pairs,
+                                            .contrast = contrast_sign::either_per_patch};
+  const std::string message = tacmap_test::message_of([&] { params.validate(); });
+  CHECK(message.find("contrast = either_per_patch") != std::string::npos);
+  CHECK(message.find("pairs = all_pairs") != std::string::npos);
+  CHECK(tacmap_test::message_of([&] {
+          descriptor_likelihood(raw_patch{}, map, {.width = 6, .height = 14}, params);
+        }) == message);
+  CHECK_NOTHROW(
+      descriptor_likelihood_params{.contrast = contrast_sign::either_per_patch}.validate());
+  CHECK(descriptor_likelihood_params{}.contrast == contrast_sign::as_is);
 }

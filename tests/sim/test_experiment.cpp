@@ -71,14 +71,17 @@ TEST_CASE("median and median_error_per_touch") {
 
 TEST_CASE("localization_config::name") {
   tacmap::localization_config c;  // the default: the best configuration measured
-  CHECK(c.name() == "classic_sift/aligned/exponential/per_window");
+  CHECK(c.name() == "classic_sift/aligned/exponential/per_window/latent");
   c.model = tacmap::measurement_kind::ncc;
-  CHECK(c.name() == "ncc");
+  CHECK(c.name() == "ncc/latent");
   c.model = tacmap::measurement_kind::lite;
   c.pairs = tacmap::pairing::all_pairs;
   c.shape = tacmap::likelihood_shape::inverse;
   c.features = tacmap::window_features::shared_dense;
+  c.appearance = tacmap::appearance_handling::fixed;  // the paper's: raised parts look bright
   CHECK(c.name() == "sift_lite/all_pairs/inverse/shared_dense");
+  c.appearance = tacmap::appearance_handling::unsigned_gradients;
+  CHECK(c.name() == "sift_lite/all_pairs/inverse/shared_dense/unsigned");
 }
 
 TEST_CASE("localization_experiment: a gecko sequence end to end (NCC, fast in Debug)") {

@@ -446,8 +446,23 @@ TEST_CASE("localization_experiment: the realistic scenario runs and is reproduci
 TEST_CASE("localization_config::name shows tau when it is set") {
   tacmap::localization_config c;
   c.tau = 0.5;
+  CHECK(c.name() == "classic_sift/aligned/exponential/per_window/tau=0.5/latent");
+  c.appearance = tacmap::appearance_handling::fixed;
   CHECK(c.name() == "classic_sift/aligned/exponential/per_window/tau=0.5");
   c.model = tacmap::measurement_kind::ncc;
   c.tau = 0.1;
   CHECK(c.name() == "ncc/tau=0.1");
+  c.appearance = tacmap::appearance_handling::latent;
+  c.appearance_switch = 0.2;
+  CHECK(c.name() == "ncc/tau=0.1/latent/switch=0.2");
+  CHECK(c.switch_probability() == 0.2);
+  c.appearance_switch.reset();
+  CHECK(c.switch_probability() == tacmap::localization_config::default_appearance_switch);
+  c.appearance = tacmap::appearance_handling::fixed;
+  CHECK(c.switch_probability() == 0.0);
+  // A switch with a fixed appearance contradicts it: the error names both.
+  c.appearance_switch = 0.1;
+  const std::string m = tacmap_test::message_of([&] { c.validate(); });
+  CHECK(m.find("appearance_switch = 0.1 needs appearance = latent") != std::string::npos);
+  CHECK(m.find("appearance = fixed") != std::string::npos);
 }

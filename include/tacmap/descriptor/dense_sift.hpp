@@ -179,6 +179,23 @@ class dense_sift {
                                                             Eigen::Index angle) noexcept {
     return angle + NumAngles * (by + NumBins * bx);
   }
+  /// What inverting the image's contrast does to a descriptor: element i of the descriptor of
+  /// (max + min - image) is element perm[i] of the image's descriptor. Every gradient turns by
+  /// half a turn, so channel k of each bin becomes channel k + NumAngles / 2; the image scale
+  /// (step 1 of the pipeline: division by the maximum) is the same for both when the image is
+  /// non-negative, and the normalise-and-clamp step commutes with a permutation. An involution
+  /// without fixed points: `descriptor_likelihood` (`both_signs`) uses it to match both
+  /// contrast signs in one pass.
+  [[nodiscard]] static std::vector<Eigen::Index> contrast_permutation() requires(NumAngles % 2 ==
+                                                                                 0) {
+    std::vector<Eigen::Index> perm(static_cast<std::size_t>(descriptor_size));
+    for (Eigen::Index bx = 0; bx < NumBins; ++bx)
+      for (Eigen::Index by = 0; by < NumBins; ++by)
+        for (Eigen::Index k = 0; k < NumAngles; ++k)
+          perm[static_cast<std::size_t>(element_index(by, bx, k))] =
+              element_index(by, bx, (k + NumAngles / 2) % NumAngles);
+    return perm;
+  }
   /// Centre angle of orientation channel k, radians (y down: pi/2 points down the image).
   [[nodiscard]] static double channel_angle(Eigen::Index k) noexcept {
     return 2.0 * std::numbers::pi * static_cast<double>(k) / NumAngles;

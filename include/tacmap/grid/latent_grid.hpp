@@ -30,6 +30,7 @@
 
 #include "tacmap/config.hpp"
 #include "tacmap/grid/concept.hpp"
+#include "tacmap/image.hpp"
 
 namespace tacmap {
 

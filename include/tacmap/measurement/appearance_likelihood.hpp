@@ -26,7 +26,10 @@
 // a descriptor that is already invariant to the sign of contrast gains nothing from the second
 // hypothesis (both blocks get the same likelihood, the posterior stays at its prior) and pays for
 // it; one that is not gets the invariance from the filter. The cost is one likelihood of M per
-// hypothesis per touch (plus a copy of each block).
+// hypothesis per touch, less where M scores several at once: `descriptor_likelihood` streams its
+// map descriptors once for all hypotheses (`log_likelihood_each`), and with a descriptor that
+// declares its contrast permutation (dense_sift) and `both_signs` it scores a touch and its
+// inverse with the multiply-adds of one (`log_likelihood_both_signs`).
 //
 // The likelihoods of different hypotheses are compared by their absolute values, so M must not
 // normalise its output per call (none of the shipped models does: they return -d / tau,
@@ -34,6 +37,7 @@
 #pragma once
 
 #include <cstddef>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -43,6 +47,27 @@
 #include "tacmap/measurement/concept.hpp"
 
 namespace tacmap {
+
+/// Measurement models that can score several measurements in one call, block k of `out` for
+/// measurement k (`descriptor_likelihood::log_likelihood_each`: one pass over the map's
+/// descriptors for all of them). `appearance_likelihood` then hands it every hypothesis's image
+/// at once, straight into the latent belief's blocks.
+template <class M, class G>
+concept measures_each = requires(const M& m, const G& g,
+                                 std::span<const typename M::measurement_type> zs,
+                                 typename G::scalar_type* out) {
+  m.log_likelihood_each(g, zs, out);
+};
+
+/// Measurement models that score a touch and its inverted contrast in one call, blocks 0 and 1
+/// of `out` (`descriptor_likelihood::log_likelihood_both_signs`: with a contrast-symmetric
+/// descriptor, both for the multiply-adds of one).
+template <class M, class G>
+concept measures_both_signs = requires(const M& m, const G& g,
+                                       const typename M::measurement_type& z,
+                                       typename G::scalar_type* out) {
+  m.log_likelihood_both_signs(g, z, out);
+};
 
 /// How the photograph shows the object's height (a hypothesis of `appearance_likelihood`).
 enum class appearance {
@@ -119,6 +144,21 @@ class appearance_likelihood {
                    "; expected one grid hypothesis per appearance — build the latent_grid with "
                    "the model's hypothesis_names()");
     const Eigen::Index n = grid.hypothesis_size();
+    if constexpr (measures_both_signs<Model, typename G::base_type>) {
+      if (hypotheses_.size() == 2 && hypotheses_[0] == appearance::as_photographed &&
+          hypotheses_[1] == appearance::inverted) {
+        model_.log_likelihood_both_signs(grid.base(), z, out.data());
+        return;
+      }
+    }
+    if constexpr (measures_each<Model, typename G::base_type>) {
+      auto& images = images_;
+      images.resize(hypotheses_.size());
+      for (std::size_t h = 0; h < hypotheses_.size(); ++h)
+        images[h] = appearance_transform(z, hypotheses_[h]);
+      model_.log_likelihood_each(grid.base(), std::span<const image<float>>(images), out.data());
+      return;
+    }
     auto& block = scratch<typename G::scalar_type>();
     block.resize(n);
     for (std::size_t h = 0; h < hypotheses_.size(); ++h) {
@@ -146,6 +186,7 @@ class appearance_likelihood {
   // One block of log-likelihoods, kept between calls: one object is not reentrant.
   mutable Eigen::ArrayXf scratch_f_;
   mutable Eigen::ArrayXd scratch_d_;
+  mutable std::vector<image<float>> images_;  // each hypothesis's view of the touch
 };
 
 }  // namespace tacmap

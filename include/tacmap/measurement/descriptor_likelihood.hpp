@@ -23,11 +23,19 @@
 //    (and the whole map's normalisation) where the tactile image sees its own borders; with
 //    descriptors whose support is large next to the window (SIFT-lite's 9 px bins on an 18 px
 //    wide window) this costs accuracy — measured in README.
+//
+// The sign of contrast (`contrast_sign`, beyond the paper): a touch shows raised parts as high
+// pressure, a photo may show them darker than around them, which turns every gradient by 180
+// degrees (reference/cross-modal-matching.md). With `either_per_patch` each aligned patch pair
+// counts the better of the tactile image and its inversion z' = max(z) + min(z) - z:
+//   either_per_patch:  d(x, z) = sum_m min(|| f_{x,m} - g_m ||, || f_{x,m} - g'_m ||)
+// with g'_m the descriptors of z' (the same descriptor, so any descriptor works).
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <concepts>
+#include <span>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -65,6 +73,19 @@ enum class window_features {
   shared_dense,
 };
 
+/// Which sign of contrast a tactile patch is matched with (beyond the paper).
+enum class contrast_sign {
+  /// The tactile image as it is: raised (high pressure) must look brighter in the map. The
+  /// paper's assumption (its gecko is a light print on a dark base).
+  as_is,
+  /// Per aligned patch, the smaller distance of the tactile image and of its inversion
+  /// max(z) + min(z) - z: raised parts may look brighter or darker, even differently in different
+  /// patches of one touch. Costs a second tactile description and twice the distances per touch,
+  /// and a patch may now also match contrast-reversed structure that is not its own. Aligned
+  /// pairing only: with all pairs there is no patch pair whose sign the minimum would choose.
+  either_per_patch,
+};
+
 /// Configuration of `descriptor_likelihood`. The defaults are the best configuration measured
 /// with tacmap-evaluate (README, "Localization results": aligned pairs with an exponential
 /// likelihood beat the paper's all-pairs / inverse choice on every map and descriptor);
@@ -74,9 +95,20 @@ struct descriptor_likelihood_params {
   window_features features = window_features::per_window;  ///< paper: per window
   pairing pairs = pairing::aligned;                        ///< paper: all_pairs (eq. (1))
   likelihood_shape shape = likelihood_shape::exponential;  ///< paper: inverse (eq. (2))
-  double epsilon = 1e-3;   ///< inverse: added to d so that d = 0 is finite
-  double tau = 1.0;        ///< exponential: temperature, in distance units
-  double tempering = 1.0;  ///< exponent on the likelihood, >= 0
+  double epsilon = 1e-3;  ///< inverse: added to d so that d = 0 is finite
+  /// Exponential: temperature, in distance units. 0.25: the best measured with the latent
+  /// appearance hypotheses (README, "The photo is not the touch": the hypotheses' evidence
+  /// concentrates faster than at 1, and a fixed appearance loses nothing), as for the rotated
+  /// model.
+  double tau = 0.25;
+  double tempering = 1.0;                         ///< exponent on the likelihood, >= 0
+  contrast_sign contrast = contrast_sign::as_is;  ///< paper: as_is; either_per_patch: aligned only
+  /// Prepare for `log_likelihood_both_signs` (the appearance hypotheses of
+  /// `appearance_likelihood`): the map's descriptors are stored in the sum/difference basis of
+  /// the descriptor's `contrast_permutation()`, where a touch and its inverted contrast are
+  /// matched with the multiply-adds of one (distances are unchanged by the basis). Needs a
+  /// descriptor with a contrast permutation (dense_sift), aligned pairing and contrast as_is.
+  bool both_signs = false;
 
   /// The paper's configuration: all pairs (eq. (1)), inverse likelihood (eq. (2)), per window.
   [[nodiscard]] static descriptor_likelihood_params paper() {
@@ -98,6 +130,21 @@ struct descriptor_likelihood_params {
     if (!(std::isfinite(tempering) && tempering >= 0.0))
       detail::fail("descriptor_likelihood_params: tempering = ", tempering,
                    "; expected a finite exponent >= 0");
+    if (contrast == contrast_sign::either_per_patch && pairs == pairing::all_pairs)
+      detail::fail(
+          "descriptor_likelihood_params: contrast = either_per_patch with pairs = all_pairs; "
+          "expected pairs = aligned (either_per_patch takes the nearer sign for each patch m "
+          "against patch m; all pairs compare every patch with every other), or contrast = as_is");
+    if (both_signs && pairs == pairing::all_pairs)
+      detail::fail(
+          "descriptor_likelihood_params: both_signs = true with pairs = all_pairs; "
+          "expected pairs = aligned (the one-pass match of both contrast signs pairs "
+          "patch m with patch m), or both_signs = false");
+    if (both_signs && contrast == contrast_sign::either_per_patch)
+      detail::fail(
+          "descriptor_likelihood_params: both_signs = true with contrast = "
+          "either_per_patch; expected one of them (both_signs scores each sign for the "
+          "whole touch, either_per_patch picks a sign per patch)");
   }
 };
 
@@ -119,6 +166,15 @@ concept samples_on_grid = descriptor<D> &&
   {
     d.sample(img).values
     } -> std::convertible_to<Eigen::Array<typename D::scalar_type, Eigen::Dynamic, Eigen::Dynamic>>;
+};
+
+/// Descriptors that say what inverting an image's contrast does to their values: element i of
+/// the descriptor of (max + min - image) is element `contrast_permutation()[i]` of the image's
+/// (an involution without fixed points; `dense_sift`: orientation channels turned by half a
+/// turn). `descriptor_likelihood_params::both_signs` then matches both signs in one pass.
+template <class D>
+concept contrast_symmetric_descriptor = euclidean_descriptor<D> && requires(const D& d) {
+  { d.contrast_permutation() } -> std::convertible_to<std::vector<Eigen::Index>>;
 };
 
 namespace detail {
@@ -166,6 +222,8 @@ class descriptor_likelihood {
  public:
   using scalar_type = typename Descriptor::scalar_type;
   using measurement_type = image<float>;  ///< preprocessed tactile image at map scale
+  /// Descriptors as columns (dimension x count).
+  using descriptor_matrix = Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>;
 
   /// Computes the map's dense descriptors once. `window` is the tactile image's size in map
   /// pixels (the grid's window). Throws std::invalid_argument when the map is smaller than the
@@ -186,8 +244,19 @@ class descriptor_likelihood {
     Eigen::Index last_offset_row = 0;
     for (const grid_cell& o : offsets_) last_offset_row = std::max(last_offset_row, o.row);
     const Eigen::Index used_rows = (map.rows() - window.height + 1) + last_offset_row;
-    field_tiles_ =
-        detail::descriptor_tiles<scalar_type>(field_.values.leftCols(used_rows * field_.cols));
+    if (params.both_signs) {
+      if constexpr (contrast_symmetric_descriptor<Descriptor>) {
+        basis_ = detail::contrast_basis(descriptor_.contrast_permutation());
+      } else {
+        detail::fail(
+            "descriptor_likelihood_params: both_signs = true, but this descriptor has no "
+            "contrast_permutation() (what inverting the contrast does to its values); "
+            "use both_signs = false (appearance_likelihood then scores each sign in its "
+            "own pass)");
+      }
+    }
+    field_tiles_ = detail::descriptor_tiles<scalar_type>(
+        in_stored_basis(field_.values.leftCols(used_rows * field_.cols)));
     rows_ = map.rows() - window.height + 1;
     cols_ = map.cols() - window.width + 1;
     if (params.features == window_features::per_window) {
@@ -204,7 +273,13 @@ class descriptor_likelihood {
           const auto wf = descriptor_.compute(cut);
           for (Eigen::Index m = 0; m < m_count; ++m) {
             const grid_cell o = offsets_[static_cast<std::size_t>(m)];
-            per_window_[static_cast<std::size_t>(m)].set(r * cols_ + c, wf.at(o.row, o.col));
+            if (params.both_signs) {
+              descriptor_matrix column(wf.values.rows(), 1);
+              basis_.apply(wf.at(o.row, o.col), column.col(0));
+              per_window_[static_cast<std::size_t>(m)].set(r * cols_ + c, column.col(0));
+            } else {
+              per_window_[static_cast<std::size_t>(m)].set(r * cols_ + c, wf.at(o.row, o.col));
+            }
           }
         }
     }
@@ -251,15 +326,147 @@ class descriptor_likelihood {
   template <class G>
   void distances(const G& grid, const measurement_type& z, belief_array<G>& out)
       const requires std::same_as<typename G::scalar_type, scalar_type> {
-    if (grid.rows() != rows_ || grid.cols() != cols_ || grid.size() != rows_ * cols_)
-      detail::fail("descriptor_likelihood: the grid has ", grid.rows(), " x ", grid.cols(),
-                   " states but the map and window give ", rows_, " x ", cols_,
-                   "; build the grid and the model from the same map and window");
-    const auto g = tactile_descriptors(z);
+    check_grid(grid);
+    const auto g = in_stored_basis(tactile_descriptors(z));
+    if (params_.contrast == contrast_sign::either_per_patch) {
+      // The inverted touch, described like the touch itself (no assumption about the
+      // descriptor's layout). It keeps z's range, so a descriptor that divides by the peak
+      // (dense_sift) sees the same scale.
+      const measurement_type inverted = (z.maxCoeff() + z.minCoeff()) - z;
+      const auto g_inverted = tactile_descriptors(inverted);
+      if (params_.features == window_features::per_window)
+        per_window_distances(g, &g_inverted, out);
+      else
+        shared_distances(g, &g_inverted, out);
+      return;
+    }
     if (params_.features == window_features::per_window)
-      per_window_distances(g, out);
+      per_window_distances(g, nullptr, out);
     else
-      shared_distances(g, out);
+      shared_distances(g, nullptr, out);
+  }
+
+  /// log p(z_k | x) for several tactile images at once: block k of `out` (`grid.size()` values
+  /// from `out + k * grid.size()`) receives what `log_likelihood(grid, zs[k], ...)` would. With
+  /// aligned pairing (the default) and a Euclidean descriptor, one pass over the windows'
+  /// descriptors serves every image: `appearance_likelihood`'s hypotheses stream the 12.5 MB of
+  /// per-window descriptors (classic_sift, 120 px map) once per touch instead of once each.
+  template <class G>
+  void log_likelihood_each(const G& grid, std::span<const measurement_type> zs, scalar_type* out)
+      const requires std::same_as<typename G::scalar_type, scalar_type> {
+    const Eigen::Index n = grid.size();
+    const auto count = static_cast<Eigen::Index>(zs.size());
+    bool shared_pass =
+        params_.pairs == pairing::aligned && params_.contrast == contrast_sign::as_is && count > 1;
+    if constexpr (!euclidean_descriptor<Descriptor>) shared_pass = false;
+    if (!shared_pass) {
+      belief_array<G> block(n);
+      for (Eigen::Index k = 0; k < count; ++k) {
+        log_likelihood(grid, zs[static_cast<std::size_t>(k)], block);
+        Eigen::Map<Eigen::Array<scalar_type, Eigen::Dynamic, 1>>(out + k * n, n) = block;
+      }
+      return;
+    }
+    check_grid(grid);
+    const Eigen::Index m_count = patches_per_window();
+    // Every image's descriptors side by side, image-major: column k * M + m is image k's patch m.
+    auto& all = signs_;
+    for (Eigen::Index k = 0; k < count; ++k) {
+      const auto g = in_stored_basis(tactile_descriptors(zs[static_cast<std::size_t>(k)]));
+      if (k == 0) all.resize(g.rows(), count * m_count);
+      all.middleCols(k * m_count, m_count) = g;
+    }
+    auto& dist = workspace_;
+    if (params_.features == window_features::per_window) {
+      // Per patch m: the windows' patch m against patch m of every image, in one pass.
+      dist.resize(n, count);
+      descriptor_matrix& column = patch_columns_;
+      column.resize(all.rows(), count);
+      for (Eigen::Index m = 0; m < m_count; ++m) {
+        for (Eigen::Index k = 0; k < count; ++k) column.col(k) = all.col(k * m_count + m);
+        distance_columns(per_window_[static_cast<std::size_t>(m)], column, dist);
+        for (Eigen::Index k = 0; k < count; ++k) {
+          Eigen::Map<Eigen::Array<scalar_type, Eigen::Dynamic, 1>> block(out + k * n, n);
+          if (m == 0)
+            block = dist.col(k);
+          else
+            block += dist.col(k);
+        }
+      }
+    } else {
+      // One pass over the dense field for every image's patches, then each image's windows
+      // as sums of shifted columns (as shared_distances does for one).
+      dist.resize(field_.rows * field_.cols, count * m_count);
+      distance_columns(field_tiles_, all, dist);
+      for (Eigen::Index k = 0; k < count; ++k) {
+        Eigen::Map<image<scalar_type>> d(out + k * n, rows_, cols_);
+        for (Eigen::Index m = 0; m < m_count; ++m) {
+          const Eigen::Map<const image<scalar_type>> dn(&dist(0, k * m_count + m), field_.rows,
+                                                        field_.cols);
+          const grid_cell o = offsets_[static_cast<std::size_t>(m)];
+          if (m == 0)
+            d = dn.block(o.row, o.col, rows_, cols_);
+          else
+            d += dn.block(o.row, o.col, rows_, cols_);
+        }
+      }
+    }
+    for (Eigen::Index k = 0; k < count; ++k) {
+      Eigen::Map<Eigen::Array<scalar_type, Eigen::Dynamic, 1>> block(out + k * n, n);
+      to_log_likelihood(block);
+    }
+  }
+
+  /// log p(z | x) and log p(z^- | x) for the touch z and its inverted contrast
+  /// z^- = max(z) + min(z) - z (the two appearance hypotheses of `appearance_likelihood`), into
+  /// blocks 0 and 1 of `out` (`grid.size()` values each). With `params().both_signs` the map's
+  /// descriptors sit in the sum/difference basis of the descriptor's contrast permutation, and
+  /// one pass gives both (the multiply-adds of one touch); otherwise it is
+  /// `log_likelihood_each(grid, {z, z^-}, out)`.
+  template <class G>
+  void log_likelihood_both_signs(const G& grid, const measurement_type& z, scalar_type* out)
+      const requires std::same_as<typename G::scalar_type, scalar_type> {
+    if (!params_.both_signs) {
+      detail::check_tactile_image("descriptor_likelihood", z, window_);
+      const measurement_type images[2] = {z, (z.maxCoeff() + z.minCoeff()) - z};
+      log_likelihood_each(grid, std::span<const measurement_type>(images), out);
+      return;
+    }
+    check_grid(grid);
+    const Eigen::Index n = grid.size();
+    const Eigen::Index m_count = patches_per_window();
+    const descriptor_matrix g = in_stored_basis(tactile_descriptors(z));
+    const Eigen::Index half = basis_.half();
+    scalar_type* plus = out;
+    scalar_type* minus = out + n;
+    if (params_.features == window_features::per_window) {
+      for (Eigen::Index m = 0; m < m_count; ++m)
+        detail::accumulate_sign_pair(per_window_[static_cast<std::size_t>(m)], &g(0, m), half, plus,
+                                     minus, m > 0);
+    } else {
+      // Per patch, both signs' distances over the dense field (columns m and M + m), then each
+      // sign's windows as sums of shifted columns.
+      auto& dist = workspace_;
+      dist.resize(field_.rows * field_.cols, 2 * m_count);
+      for (Eigen::Index m = 0; m < m_count; ++m)
+        detail::accumulate_sign_pair(field_tiles_, &g(0, m), half, &dist(0, m),
+                                     &dist(0, m_count + m), false);
+      for (Eigen::Index sign = 0; sign < 2; ++sign) {
+        Eigen::Map<image<scalar_type>> d(out + sign * n, rows_, cols_);
+        for (Eigen::Index m = 0; m < m_count; ++m) {
+          const Eigen::Map<const image<scalar_type>> dn(&dist(0, sign * m_count + m), field_.rows,
+                                                        field_.cols);
+          const grid_cell o = offsets_[static_cast<std::size_t>(m)];
+          if (m == 0)
+            d = dn.block(o.row, o.col, rows_, cols_);
+          else
+            d += dn.block(o.row, o.col, rows_, cols_);
+        }
+      }
+    }
+    for (Eigen::Index sign = 0; sign < 2; ++sign)
+      to_log_likelihood(
+          Eigen::Map<Eigen::Array<scalar_type, Eigen::Dynamic, 1>>(out + sign * n, n));
   }
 
   /// log p(z | x) for every state: eq. (1) then eq. (2) or the exponential, times tempering.
@@ -267,15 +474,37 @@ class descriptor_likelihood {
   void log_likelihood(const G& grid, const measurement_type& z, belief_array<G>& out)
       const requires std::same_as<typename G::scalar_type, scalar_type> {
     distances(grid, z, out);
-    const auto temper = static_cast<scalar_type>(params_.tempering);
-    if (params_.shape == likelihood_shape::inverse)
-      out = -temper * (out + static_cast<scalar_type>(params_.epsilon)).log();
-    else
-      out *= -temper / static_cast<scalar_type>(params_.tau);
+    to_log_likelihood(out);
   }
 
  private:
-  using descriptor_matrix = Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>;
+  // Descriptors as columns, in the basis the map's descriptors are stored in: the contrast
+  // basis with both_signs, else as they are.
+  template <class Derived>
+  [[nodiscard]] descriptor_matrix in_stored_basis(const Eigen::DenseBase<Derived>& columns) const {
+    descriptor_matrix out = columns;
+    if (params_.both_signs)
+      for (Eigen::Index j = 0; j < out.cols(); ++j) basis_.apply(columns.col(j), out.col(j));
+    return out;
+  }
+
+  // Distances -> eq. (2) or the exponential, times tempering, in place.
+  template <class Array>
+  void to_log_likelihood(Array&& d) const {
+    const auto temper = static_cast<scalar_type>(params_.tempering);
+    if (params_.shape == likelihood_shape::inverse)
+      d = -temper * (d + static_cast<scalar_type>(params_.epsilon)).log();
+    else
+      d *= -temper / static_cast<scalar_type>(params_.tau);
+  }
+
+  template <class G>
+  void check_grid(const G& grid) const {
+    if (grid.rows() != rows_ || grid.cols() != cols_ || grid.size() != rows_ * cols_)
+      detail::fail("descriptor_likelihood: the grid has ", grid.rows(), " x ", grid.cols(),
+                   " states but the map and window give ", rows_, " x ", cols_,
+                   "; build the grid and the model from the same map and window");
+  }
 
   // out(q) (+)= sum over n in [first, first + count) of || F(q) - g_n ||, F position-major;
   // stored rather than added when !add.
@@ -294,8 +523,13 @@ class descriptor_likelihood {
     }
   }
 
-  void per_window_distances(const descriptor_matrix& g,
+  // `inverted` (either_per_patch, aligned): the inverted touch's descriptors, else null.
+  void per_window_distances(const descriptor_matrix& g, const descriptor_matrix* inverted,
                             Eigen::Array<scalar_type, Eigen::Dynamic, 1>& out) const {
+    if (inverted != nullptr) {
+      per_window_either(g, *inverted, out);
+      return;
+    }
     for (Eigen::Index m = 0; m < patches_per_window(); ++m) {
       const auto& f = per_window_[static_cast<std::size_t>(m)];
       if (params_.pairs == pairing::all_pairs)
@@ -305,22 +539,64 @@ class descriptor_likelihood {
     }
   }
 
-  void shared_distances(const descriptor_matrix& g,
+  // either_per_patch, per window: for each patch m, the distances of every window's patch m to
+  // g_m and to g'_m (two columns, one pass over the windows' descriptors), then their minimum.
+  void per_window_either(const descriptor_matrix& g, const descriptor_matrix& inverted,
+                         Eigen::Array<scalar_type, Eigen::Dynamic, 1>& out) const {
+    const Eigen::Index positions = rows_ * cols_;
+    auto& dist = workspace_;
+    dist.resize(positions, 2);
+    auto& pair = signs_;
+    pair.resize(g.rows(), 2);
+    for (Eigen::Index m = 0; m < patches_per_window(); ++m) {
+      const auto& f = per_window_[static_cast<std::size_t>(m)];
+      pair.col(0) = g.col(m);
+      pair.col(1) = inverted.col(m);
+      distance_columns(f, pair, dist);
+      if (m == 0)
+        out = dist.col(0).min(dist.col(1));
+      else
+        out += dist.col(0).min(dist.col(1));
+    }
+  }
+
+  // dist.col(n) = || F(q) - g_n || for every descriptor n of g, for the leading f.positions()
+  // entries of each column (dist must have at least that many rows and g.cols() columns).
+  void distance_columns(const detail::descriptor_tiles<scalar_type>& f, const descriptor_matrix& g,
+                        descriptor_matrix& dist) const {
+    if constexpr (euclidean_descriptor<Descriptor>) {
+      detail::squared_norms(g, g_norms_);  // one pass over f, g.cols() outputs:
+      detail::distances_each(f, g, g_norms_.data(), dist.data(), dist.rows());
+    } else {
+      for (Eigen::Index n = 0; n < g.cols(); ++n) accumulate(f, g, n, 1, &dist(0, n), false);
+    }
+  }
+
+  // `inverted` (either_per_patch, aligned): the inverted touch's descriptors, else null.
+  void shared_distances(const descriptor_matrix& g, const descriptor_matrix* inverted,
                         Eigen::Array<scalar_type, Eigen::Dynamic, 1>& out) const {
     const Eigen::Index m_count = patches_per_window();
     const Eigen::Index positions = field_.rows * field_.cols;
     // all pairs: one column S = sum_n D_n; aligned: one column D_n per tactile patch. Only the
     // leading field_tiles_.positions() entries are computed and read (see the constructor).
     auto& dist = workspace_;
-    dist.resize(positions, params_.pairs == pairing::all_pairs ? 1 : m_count);
     if (params_.pairs == pairing::all_pairs) {
+      dist.resize(positions, 1);
       accumulate(field_tiles_, g, 0, m_count, dist.data(), false);
-    } else if constexpr (euclidean_descriptor<Descriptor>) {
-      detail::squared_norms(g, g_norms_);  // one pass over the field, M outputs:
-      detail::distances_each(field_tiles_, g, g_norms_.data(), dist.data(), positions);
+    } else if (inverted == nullptr) {
+      dist.resize(positions, m_count);
+      distance_columns(field_tiles_, g, dist);
     } else {
+      // Both signs in one pass over the field: columns D_n (touch) then D'_n (inverted touch),
+      // and D_n becomes min(D_n, D'_n) — what the block additions below read.
+      auto& both = signs_;
+      both.resize(g.rows(), 2 * m_count);
+      both << g, *inverted;
+      dist.resize(positions, 2 * m_count);
+      distance_columns(field_tiles_, both, dist);
+      const Eigen::Index used = field_tiles_.positions();
       for (Eigen::Index n = 0; n < m_count; ++n)
-        accumulate(field_tiles_, g, n, 1, &dist(0, n), false);
+        dist.col(n).head(used) = dist.col(n).head(used).min(dist.col(m_count + n).head(used));
     }
     Eigen::Map<image<scalar_type>> d(out.data(), rows_, cols_);
     for (Eigen::Index m = 0; m < m_count; ++m) {
@@ -348,6 +624,11 @@ class descriptor_likelihood {
   // makes one model object non-reentrant: give each thread its own filter.
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> workspace_;
   mutable std::vector<scalar_type> g_norms_;  // the tactile descriptors' squared norms
+  // either_per_patch: a touch's and its inversion's descriptors side by side (kept, like
+  // workspace_, so that a measurement does not allocate them).
+  mutable descriptor_matrix signs_;
+  mutable descriptor_matrix patch_columns_;  // log_likelihood_each: patch m of every image
+  detail::contrast_basis basis_;  // both_signs: the basis the map's descriptors are stored in
 };
 
 }  // namespace tacmap

@@ -30,13 +30,16 @@
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <span>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <variant>
 #include <vector>
 
 #include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/descriptor/unsigned_orientation.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/grid/planar_grid.hpp"
@@ -73,10 +76,29 @@ enum class appearance_handling {
   /// "latent": both relations are hypotheses of the filter (`appearance_likelihood` over a
   /// `latent_grid`), weighed by the touches' evidence; nothing needs to be known of the object.
   latent,
+  /// "unsigned": descriptors of unsigned gradient orientation (`unsigned_orientation<D>`,
+  /// opposite orientations folded together, as unsigned-gradient HOG): invariant to the sign
+  /// of contrast at half the orientation resolution. Descriptor models, known orientation.
+  unsigned_gradients,
+  /// "per_patch": each tactile patch matched with whichever sign fits its window patch better
+  /// (`contrast_sign::either_per_patch`): handles a relation that changes across the object, at
+  /// the price of more chance matches. Descriptor models with aligned pairing, known
+  /// orientation.
+  per_patch,
 };
 
 [[nodiscard]] inline const char* to_string(appearance_handling a) {
-  return a == appearance_handling::fixed ? "fixed" : "latent";
+  switch (a) {
+    case appearance_handling::fixed:
+      return "fixed";
+    case appearance_handling::latent:
+      return "latent";
+    case appearance_handling::unsigned_gradients:
+      return "unsigned";
+    case appearance_handling::per_patch:
+      return "per_patch";
+  }
+  return "?";
 }
 
 [[nodiscard]] inline const char* to_string(measurement_kind k) {
@@ -109,7 +131,7 @@ struct localization_config {
   likelihood_shape shape = likelihood_shape::exponential;  ///< descriptor models only
   window_features features = window_features::per_window;  ///< descriptor models only
   /// Temperature: exponential shape (descriptor distance units) or NCC (log p = ncc / tau).
-  /// Empty: the model's own default (descriptor 1.0, NCC 0.1).
+  /// Empty: the model's own default (descriptor 0.25, NCC 0.1).
   std::optional<double> tau;
   double tempering = 1.0;            ///< exponent on the likelihood
   double motion_sigma_mm = 1.0;      ///< odometry_gaussian sigma (Sec. III-B)
@@ -128,20 +150,46 @@ struct localization_config {
   bool random_orientation = false;
   double turn_sigma_rad = 0.0873;  ///< pose motion: turn noise (headings > 0)
   /// How the map's brightness relates to height (see `appearance_handling`).
-  appearance_handling appearance = appearance_handling::fixed;
+  /// Default: latent, the best measured (README, "The photo is not the touch").
+  appearance_handling appearance = appearance_handling::latent;
   /// `latent` only: probability that the appearance hypothesis changes between touches
-  /// (`latent_motion_params::switch_probability`); 0 = a property of the whole object.
-  double appearance_switch = 0.0;
+  /// (`latent_motion_params::switch_probability`); 0 = a property of the whole object. Empty:
+  /// `default_appearance_switch`.
+  std::optional<double> appearance_switch;
+  /// 0.05: measured equal to 0 on objects of one relation and better on objects whose parts
+  /// differ (README, "The photo is not the touch"); 0.2 lost on the former.
+  static constexpr double default_appearance_switch = 0.05;
+
+  /// The switch probability the filter uses (0 unless the appearance is latent).
+  [[nodiscard]] double switch_probability() const {
+    if (appearance != appearance_handling::latent) return 0.0;
+    return appearance_switch.value_or(default_appearance_switch);
+  }
 
   /// Throws std::invalid_argument for settings that contradict each other, naming both.
   void validate() const {
-    if (appearance_switch != 0.0 && appearance != appearance_handling::latent)
-      detail::fail("localization_config: appearance_switch = ", appearance_switch,
+    if (appearance_switch && appearance != appearance_handling::latent)
+      detail::fail("localization_config: appearance_switch = ", *appearance_switch,
                    " needs appearance = latent (it switches between appearance hypotheses), but "
                    "appearance = ",
                    to_string(appearance), "; set appearance to latent or the switch to 0");
-    if (!(std::isfinite(appearance_switch) && appearance_switch >= 0.0 && appearance_switch <= 0.5))
-      detail::fail("localization_config: appearance_switch = ", appearance_switch,
+    const bool descriptor_level = appearance == appearance_handling::unsigned_gradients ||
+                                  appearance == appearance_handling::per_patch;
+    if (descriptor_level && model == measurement_kind::ncc)
+      detail::fail("localization_config: appearance = ", to_string(appearance),
+                   " changes the descriptors, but model = ncc has none; use sift_lite or "
+                   "classic_sift, or appearance = latent (which works with NCC)");
+    if (descriptor_level && headings > 0)
+      detail::fail("localization_config: appearance = ", to_string(appearance),
+                   " is implemented for a known orientation only, but headings = ", headings,
+                   "; use appearance = latent with a pose grid, or headings = 0");
+    if (appearance == appearance_handling::per_patch && pairs == pairing::all_pairs)
+      detail::fail(
+          "localization_config: appearance = per_patch matches patch m against patch m, "
+          "but pairs = all_pairs; use pairs = aligned");
+    if (appearance_switch && !(std::isfinite(*appearance_switch) && *appearance_switch >= 0.0 &&
+                               *appearance_switch <= 0.5))
+      detail::fail("localization_config: appearance_switch = ", *appearance_switch,
                    "; expected a probability in [0, 0.5] (two hypotheses)");
   }
 
@@ -167,9 +215,9 @@ struct localization_config {
       out += "/tau=" + t.str();
     }
     if (appearance != appearance_handling::fixed) out += std::string("/") + to_string(appearance);
-    if (appearance_switch > 0.0) {
+    if (appearance_switch) {
       std::ostringstream t;
-      t << appearance_switch;
+      t << *appearance_switch;
       out += "/switch=" + t.str();
     }
     return out;
@@ -271,9 +319,49 @@ class configured_measurement {
     std::visit([&](const auto& m) { m.log_likelihood(grid, z, out); }, model_);
   }
 
+  /// A touch and its inverted contrast (blocks 0 and 1 of `out`): the model's one-pass version
+  /// where it has one, else two calls.
+  template <class G>
+  void log_likelihood_both_signs(const G& grid, const measurement_type& z,
+                                 typename G::scalar_type* out) const {
+    std::visit(
+        [&](const auto& m) {
+          if constexpr (measures_both_signs<std::remove_cvref_t<decltype(m)>, G>) {
+            m.log_likelihood_both_signs(grid, z, out);
+          } else {
+            const measurement_type images[2] = {z, appearance_transform(z, appearance::inverted)};
+            log_likelihood_each(grid, std::span<const measurement_type>(images), out);
+          }
+        },
+        model_);
+  }
+
+  /// Several measurements at once (block k of `out` for zs[k]): the model's own one-pass
+  /// version where it has one (descriptor models), else one call each.
+  template <class G>
+  void log_likelihood_each(const G& grid, std::span<const measurement_type> zs,
+                           typename G::scalar_type* out) const {
+    std::visit(
+        [&](const auto& m) {
+          if constexpr (measures_each<std::remove_cvref_t<decltype(m)>, G>) {
+            m.log_likelihood_each(grid, zs, out);
+          } else {
+            belief_array<G> block(grid.size());
+            for (std::size_t k = 0; k < zs.size(); ++k) {
+              m.log_likelihood(grid, zs[k], block);
+              Eigen::Map<belief_array<G>>(out + static_cast<Eigen::Index>(k) * grid.size(),
+                                          grid.size()) = block;
+            }
+          }
+        },
+        model_);
+  }
+
  private:
   using variant_type = std::variant<ncc_likelihood<float>, descriptor_likelihood<sift_lite>,
-                                    descriptor_likelihood<classic_sift>>;
+                                    descriptor_likelihood<classic_sift>,
+                                    descriptor_likelihood<unsigned_orientation<sift_lite>>,
+                                    descriptor_likelihood<unsigned_orientation<classic_sift>>>;
 
   static variant_type make(const localization_config& config, const image<float>& map,
                            pixel_size window) {
@@ -289,8 +377,19 @@ class configured_measurement {
     p.features = config.features;
     if (config.tau) p.tau = *config.tau;
     p.tempering = config.tempering;
-    if (config.model == measurement_kind::lite)
-      return variant_type(std::in_place_index<1>, sift_lite{}, map, window, p);
+    if (config.appearance == appearance_handling::per_patch)
+      p.contrast = contrast_sign::either_per_patch;
+    // Latent appearance: both contrast signs in one pass (dense SIFT's contrast permutation).
+    p.both_signs = config.appearance == appearance_handling::latent && p.pairs == pairing::aligned;
+    const bool lite = config.model == measurement_kind::lite;
+    if (config.appearance == appearance_handling::unsigned_gradients) {
+      if (lite)
+        return variant_type(std::in_place_index<3>, unsigned_orientation<sift_lite>{}, map, window,
+                            p);
+      return variant_type(std::in_place_index<4>, unsigned_orientation<classic_sift>{}, map, window,
+                          p);
+    }
+    if (lite) return variant_type(std::in_place_index<1>, sift_lite{}, map, window, p);
     return variant_type(std::in_place_index<2>, classic_sift{}, map, window, p);
   }
 
@@ -438,7 +537,7 @@ class localization_experiment {
     const planar_grid<float> positions(protocol_->map_size(), protocol_->mm_per_px, window_);
     const auto appearances = config_.appearances();
     const auto names = appearance_names(appearances);
-    const latent_motion_params switching{.switch_probability = config_.appearance_switch};
+    const latent_motion_params switching{.switch_probability = config_.switch_probability()};
     if (config_.headings == 0) {
       v.filter.emplace(
           latent_grid<planar_grid<float>>(positions, names),

@@ -14,10 +14,13 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
+#include <utility>
 #include <vector>
 #include <xsimd/xsimd.hpp>
 
 #include "tacmap/config.hpp"
+#include "tacmap/image.hpp"
 
 namespace tacmap::detail {
 
@@ -234,6 +237,133 @@ void accumulate_distances(const descriptor_tiles<T>& f,
     add = true;  // later descriptors add to the first ones' sums
   }
 }
+
+namespace distance_kernel {
+
+// Tiles consecutive tiles against one descriptor g in a sum/difference basis (elements [0, half):
+// sums S, [half, dim): differences D, see `accumulate_sign_pair`): two accumulators per tile,
+// F_S.g_S and F_D.g_D, give both F.g = S + D and F.g^- = S - D for g^- = (g_S, -g_D). Four tiles
+// keep eight independent FMA chains in flight, like `block`.
+template <std::size_t Tiles, class T>
+void pair_block(const descriptor_tiles<T>& f, Eigen::Index t0, const xsimd::batch<T>* gb, T gn,
+                Eigen::Index half, T* plus, T* minus, bool add) {
+  using batch = xsimd::batch<T>;
+  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+  const Eigen::Index dim = f.dimension();
+  batch sum[Tiles], diff[Tiles];
+  for (std::size_t i = 0; i < Tiles; ++i) sum[i] = diff[i] = batch(T(0));
+  const T* tile = f.tile(t0);
+  const Eigen::Index tile_stride = dim * width;
+  for (Eigen::Index k = 0; k < half; ++k)
+    for (std::size_t i = 0; i < Tiles; ++i)
+      sum[i] = xsimd::fma(
+          batch::load_aligned(tile + static_cast<Eigen::Index>(i) * tile_stride + k * width), gb[k],
+          sum[i]);
+  for (Eigen::Index k = half; k < dim; ++k)
+    for (std::size_t i = 0; i < Tiles; ++i)
+      diff[i] = xsimd::fma(
+          batch::load_aligned(tile + static_cast<Eigen::Index>(i) * tile_stride + k * width), gb[k],
+          diff[i]);
+  for (std::size_t i = 0; i < Tiles; ++i) {
+    const Eigen::Index t = t0 + static_cast<Eigen::Index>(i);
+    const batch nf = batch::load_aligned(f.squared_norms(t));
+    const T* ti = tile + static_cast<Eigen::Index>(i) * tile_stride;
+    const batch p = xsimd::sqrt(squared_distance(sum[i] + diff[i], nf, gn, ti, dim,
+                                                 [gb](Eigen::Index k) { return gb[k]; }));
+    const batch m =
+        xsimd::sqrt(squared_distance(sum[i] - diff[i], nf, gn, ti, dim, [gb, half](Eigen::Index k) {
+          return k < half ? gb[k] : -gb[k];
+        }));
+    store_tile(p, plus, t * width, f.positions(), add);
+    store_tile(m, minus, t * width, f.positions(), add);
+  }
+}
+
+}  // namespace distance_kernel
+
+/// Both contrast signs in one pass. For descriptors stored in the sum/difference basis of a
+/// contrast permutation P (an involution: first `half` elements (f_k + f_P(k)) / sqrt 2 over the
+/// pairs k < P(k), then the differences (f_k - f_P(k)) / sqrt 2; `contrast_basis` builds it),
+/// the permuted descriptor Pg is g with its differences negated. So
+///   plus(q)  (+)= || F(q) - g ||       and       minus(q) (+)= || F(q) - P g ||
+/// share every product: F.g = F_S.g_S + F_D.g_D, F.Pg = F_S.g_S - F_D.g_D — two distances for
+/// the multiply-adds of one. `g`: one descriptor in that basis (f.dimension() values). Added to
+/// the outputs when `add`, else stored.
+template <class T>
+void accumulate_sign_pair(const descriptor_tiles<T>& f, const T* g, Eigen::Index half, T* plus,
+                          T* minus, bool add) {
+  using batch = xsimd::batch<T>;
+  const Eigen::Index dim = f.dimension();
+  TACMAP_ASSERT(half >= 0 && half <= dim, "accumulate_sign_pair: half out of range");
+  std::vector<batch, xsimd::aligned_allocator<batch>> gb(static_cast<std::size_t>(dim));
+  T gn = 0;
+  for (Eigen::Index k = 0; k < dim; ++k) {
+    gb[static_cast<std::size_t>(k)] = batch(g[k]);
+    gn += g[k] * g[k];
+  }
+  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+  const Eigen::Index count = (f.positions() + width - 1) / width;
+  Eigen::Index t = 0;
+  for (; t + 4 <= count; t += 4)
+    distance_kernel::pair_block<4>(f, t, gb.data(), gn, half, plus, minus, add);
+  for (; t < count; ++t)
+    distance_kernel::pair_block<1>(f, t, gb.data(), gn, half, plus, minus, add);
+}
+
+/// Plain reference of `accumulate_sign_pair`.
+template <class T>
+void accumulate_sign_pair_scalar(const descriptor_tiles<T>& f, const T* g, Eigen::Index half,
+                                 T* plus, T* minus, bool add) {
+  for (Eigen::Index q = 0; q < f.positions(); ++q) {
+    double p2 = 0.0, m2 = 0.0;
+    for (Eigen::Index k = 0; k < f.dimension(); ++k) {
+      const double fk = static_cast<double>(f.at(q, k));
+      const double gk = static_cast<double>(g[k]);
+      p2 += (fk - gk) * (fk - gk);
+      const double gm = k < half ? gk : -gk;
+      m2 += (fk - gm) * (fk - gm);
+    }
+    plus[q] = (add ? plus[q] : T(0)) + static_cast<T>(std::sqrt(p2));
+    minus[q] = (add ? minus[q] : T(0)) + static_cast<T>(std::sqrt(m2));
+  }
+}
+
+/// The orthonormal sum/difference basis of a contrast permutation `perm` (an involution without
+/// fixed points over [0, dim)): `apply(in, out)` writes (in_k + in_P(k)) / sqrt 2 for the pairs
+/// k < P(k) in order, then (in_k - in_P(k)) / sqrt 2. Euclidean distances are unchanged by it;
+/// the permutation becomes a sign flip of the second half.
+class contrast_basis {
+ public:
+  contrast_basis() = default;
+  explicit contrast_basis(const std::vector<Eigen::Index>& perm) {
+    const auto dim = static_cast<Eigen::Index>(perm.size());
+    for (Eigen::Index k = 0; k < dim; ++k) {
+      const Eigen::Index p = perm[static_cast<std::size_t>(k)];
+      if (p < 0 || p >= dim || p == k || perm[static_cast<std::size_t>(p)] != k)
+        fail("contrast_basis: element ", k, " maps to ", p,
+             "; expected an involution without fixed points over [0, ", dim,
+             ") (the descriptor's contrast_permutation())");
+      if (k < p) pairs_.push_back({k, p});
+    }
+  }
+  [[nodiscard]] Eigen::Index dimension() const { return 2 * half(); }
+  /// Number of sums (= number of differences).
+  [[nodiscard]] Eigen::Index half() const { return static_cast<Eigen::Index>(pairs_.size()); }
+  template <class In, class Out>
+  void apply(const In& in, Out&& out) const {
+    const double r = 1.0 / std::sqrt(2.0);
+    const Eigen::Index h = half();
+    for (Eigen::Index i = 0; i < h; ++i) {
+      const auto [a, b] = pairs_[static_cast<std::size_t>(i)];
+      const double x = static_cast<double>(in(a)), y = static_cast<double>(in(b));
+      out(i) = static_cast<std::remove_cvref_t<decltype(out(i))>>((x + y) * r);
+      out(h + i) = static_cast<std::remove_cvref_t<decltype(out(i))>>((x - y) * r);
+    }
+  }
+
+ private:
+  std::vector<std::pair<Eigen::Index, Eigen::Index>> pairs_;
+};
 
 /// A half-open range of positions [begin, end).
 struct position_range {
