@@ -237,7 +237,11 @@ tacmap::touch_protocol horse_protocol() {
   const tacmap::pixel_size window = tacmap::tactile_window({}, p.mm_per_px);
   const tacmap::planar_grid<float> grid(p.map_size(), p.mm_per_px, window);
   tacmap::sim_rng rng(p.seed);
-  while (p.locations.size() < 7) {
+  for (int attempt = 0; p.locations.size() < 7; ++attempt) {
+    if (attempt > 100000)
+      tacmap::detail::fail("gecko_demo: ", p.map_file,
+                           " has too few windows over the "
+                           "horse's edge; expected a silhouette filling part of the image");
     const auto i = static_cast<Eigen::Index>(rng.below(static_cast<std::uint64_t>(grid.size())));
     const tacmap::grid_cell cell = grid.cell(i);
     const float dark_share =

@@ -455,6 +455,12 @@ int main(int argc, char** argv) try {
   }
 
   // One copy of every configuration per --appearance (and, for latent, --appearance-switch).
+  if (!appearance_switches.empty() &&
+      std::find(appearances.begin(), appearances.end(), "latent") == appearances.end())
+    throw CLI::ValidationError("--appearance-switch",
+                               csv_number(appearance_switches.front()) +
+                                   " switches between appearance hypotheses, but no --appearance "
+                                   "given has them; add --appearance latent");
   {
     std::vector<tacmap::localization_config> expanded;
     for (const auto& a : appearances) {
@@ -464,38 +470,28 @@ int main(int argc, char** argv) try {
            {"latent", tacmap::appearance_handling::latent},
            {"unsigned", tacmap::appearance_handling::unsigned_gradients},
            {"per_patch", tacmap::appearance_handling::per_patch}});
-      std::vector<std::optional<double>> switches(appearance_switches.begin(),
-                                                  appearance_switches.end());
+      // The switch list applies to latent appearances; the others take one unset switch.
+      std::vector<std::optional<double>> switches;
+      if (handling == tacmap::appearance_handling::latent)
+        switches.assign(appearance_switches.begin(), appearance_switches.end());
       if (switches.empty()) switches.emplace_back();  // the configuration's default
       for (const auto& sw : switches) {
-        if (sw && handling != tacmap::appearance_handling::latent) {
-          if (appearances.size() == 1)
-            throw CLI::ValidationError(
-                "--appearance-switch",
-                csv_number(*sw) + " switches between appearance hypotheses, but --appearance " + a +
-                    " has none; use --appearance latent");
-          continue;
-        }
         for (auto c : configs) {
           c.appearance = handling;
           c.appearance_switch = sw;
-          const bool descriptor_level =
-              handling == tacmap::appearance_handling::unsigned_gradients ||
-              handling == tacmap::appearance_handling::per_patch;
-          if (descriptor_level && (c.model == tacmap::measurement_kind::ncc || c.headings > 0 ||
-                                   (handling == tacmap::appearance_handling::per_patch &&
-                                    c.pairs == tacmap::pairing::all_pairs))) {
-            std::fprintf(stderr, "tacmap-evaluate: skipping %s with --appearance %s (%s)\n",
-                         c.name().c_str(), a.c_str(),
-                         c.model == tacmap::measurement_kind::ncc ? "no descriptors"
-                         : c.headings > 0                         ? "known orientation only"
-                                                                  : "aligned pairing only");
+          try {  // the configuration's own rules (e.g. no descriptors in NCC): skip, say why
+            c.validate();
+          } catch (const std::invalid_argument& e) {
+            std::fprintf(stderr, "tacmap-evaluate: skipping %s: %s\n", c.name().c_str(), e.what());
             continue;
           }
           expanded.push_back(c);
         }
       }
     }
+    if (expanded.empty())
+      throw CLI::ValidationError("--appearance",
+                                 "no configuration left to run (see the skipped ones above)");
     configs = std::move(expanded);
   }
 

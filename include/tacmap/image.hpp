@@ -47,5 +47,16 @@ bool all_finite(const Eigen::DenseBase<Derived>& values) {
   return values.derived().array().isFinite().all();
 }
 
+/// The image with its contrast inverted, max + min - img: [min, max] onto itself, reversed. What
+/// a photograph shows of an object whose raised parts are dark, seen the touch's way round.
+template <class Derived>
+[[nodiscard]] auto inverted_contrast(const Eigen::DenseBase<Derived>& img) {
+  using T = typename Derived::Scalar;
+  using out_type = Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  if (img.size() == 0) return out_type(img.rows(), img.cols());
+  return out_type((img.derived().array().maxCoeff() + img.derived().array().minCoeff()) -
+                  img.derived().array());
+}
+
 }  // namespace detail
 }  // namespace tacmap

@@ -415,3 +415,85 @@ TEST_CASE("appearance_likelihood: the one-pass path gives the generic path's lik
   slow.log_likelihood(g, z, b);
   CHECK((a - b).abs().maxCoeff() < 1e-3F * b.abs().maxCoeff());
 }
+
+TEST_CASE("appearance_likelihood: a pattern that is its own inverse keeps both appearances open") {
+  // Stripes whose inverse is the same stripes half a period over: every touch fits a window
+  // under either appearance, so the evidence cannot choose and the filter must not pretend to.
+  tacmap::image<float> map(60, 48);
+  for (Eigen::Index r = 0; r < map.rows(); ++r)
+    for (Eigen::Index c = 0; c < map.cols(); ++c)
+      map(r, c) = 0.5F + 0.4F * std::sin(2.0F * 3.14159265F * static_cast<float>(c) / 12.0F);
+  const tacmap::pixel_size window{.width = 18, .height = 42};
+  const planar positions({.width = 48, .height = 60}, 1.0, window);
+  using model_t = tacmap::descriptor_likelihood<tacmap::sift_lite>;
+  const tacmap::appearance_likelihood<model_t> appearance(
+      model_t({}, map, window, {.both_signs = true}));
+  tacmap::bayes_filter f(
+      latent(positions, appearance.hypothesis_names()),
+      tacmap::latent_motion<tacmap::odometry_gaussian>(tacmap::odometry_gaussian{}), appearance);
+  const tacmap::image<float> touch = map.block(8, 14, 42, 18);
+  for (int k = 0; k < 4; ++k) f.update(touch / touch.maxCoeff());
+  const auto e = f.estimate();
+  CHECK(f.belief().allFinite());
+  CHECK(e.hypothesis_probability[0] > 0.2);
+  CHECK(e.hypothesis_probability[1] > 0.2);
+  // Positions: the stripes repeat every 12 px, so several columns stay possible.
+  CHECK(e.map_probability < 0.6);
+}
+
+TEST_CASE("estimate(): the MAP position is the marginal's, not the joint state's") {
+  tacmap::bayes_filter f(
+      latent(small_grid(), {"a", "b"}),
+      tacmap::latent_motion<tacmap::odometry_gaussian>(tacmap::odometry_gaussian{}),
+      table_likelihood{});
+  // Position 3 fits both hypotheses (2.9 each); the single best joint state is (b, 7) at 3.0.
+  Eigen::ArrayXf ll = Eigen::ArrayXf::Zero(40);
+  ll(3) = 2.9F;
+  ll(20 + 3) = 2.9F;
+  ll(20 + 7) = 3.0F;
+  f.update(ll);
+  const auto e = f.estimate();
+  CHECK(e.map_hypothesis == 1);  // b holds more mass
+  CHECK(e.map_index == 20 + 3);  // position 3 (summed over a and b), in b's block
+  CHECK(e.map_mm == f.grid().base().state_mm(3));
+  const double total = 37.0 + 2.0 * std::exp(2.9) + std::exp(3.0);
+  CHECK(e.map_probability == doctest::Approx(2.0 * std::exp(2.9) / total).epsilon(1e-4));
+}
+
+TEST_CASE("latent_motion: one block's mass leaves the grid, another's stays") {
+  const latent g(small_grid(), {"a", "b"});  // 5 columns x 4 rows of states, 2 mm apart
+  const tacmap::latent_motion<tacmap::odometry_gaussian> motion(tacmap::odometry_gaussian{});
+  Eigen::ArrayXf in = Eigen::ArrayXf::Zero(40);
+  for (Eigen::Index r = 0; r < 4; ++r) {
+    in(r * 5 + 0) = 0.3F / 4.0F;       // a: left column
+    in(20 + r * 5 + 4) = 0.7F / 4.0F;  // b: right column
+  }
+  Eigen::ArrayXf out(40);
+  const auto report = motion.predict(g, in, out, {.dx_mm = -4.0, .dy_mm = 0.0});
+  CHECK(out.allFinite());
+  CHECK(out.head(20).sum() == 0.0F);  // a left the grid
+  CHECK(out.tail(20).sum() == doctest::Approx(1.0).epsilon(1e-5));
+  // All of a, and what b alone loses over the top and bottom edges (the base model's figure).
+  Eigen::ArrayXf b_in = in.tail(20) / 0.7F, b_out(20);
+  const auto b_report =
+      tacmap::odometry_gaussian{}.predict(g.base(), b_in, b_out, {.dx_mm = -4.0, .dy_mm = 0.0});
+  CHECK(b_report.mass_lost < 0.2);
+  CHECK(report.mass_lost == doctest::Approx(0.3 + 0.7 * b_report.mass_lost).epsilon(1e-4));
+  CHECK((out.tail(20) - b_out).abs().maxCoeff() < 1e-6F);
+}
+
+TEST_CASE("appearance_likelihood: a grid whose hypotheses are in another order is refused") {
+  const tacmap::image<float> map = blob_map(50, 30, 2);
+  const tacmap::pixel_size window{.width = 18, .height = 42};
+  const planar positions({.width = 30, .height = 50}, 1.0, window);
+  using model_t = tacmap::ncc_likelihood<float>;
+  const tacmap::appearance_likelihood<model_t> model(model_t(map, window));
+  const latent swapped(positions, {"inverted", "as photographed"});
+  tacmap::belief_array<latent> out(swapped.size());
+  const auto m = message_of([&] { model.log_likelihood(swapped, map.block(0, 0, 42, 18), out); });
+  CHECK(m.find("hypothesis 0 is named 'inverted' but the model's is 'as photographed'") !=
+        std::string::npos);
+  CHECK(message_of([&] {
+          (void)tacmap::marginal_belief(swapped, Eigen::ArrayXf(7));
+        }).find("the belief has 7 values but the grid") != std::string::npos);
+}

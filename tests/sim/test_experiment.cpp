@@ -185,3 +185,29 @@ TEST_CASE("encode_png_rgb: header and stored scanlines") {
   bad.b(0, 1) = std::nanf("");
   CHECK_THROWS_AS(static_cast<void>(tacmap::encode_png_rgb(bad)), std::invalid_argument);
 }
+
+TEST_CASE("localization_experiment: a random polarity is drawn per sequence, reproducibly") {
+  tacmap::localization_config config;
+  config.model = tacmap::measurement_kind::ncc;  // fast in Debug
+  config.scenario.polarity = tacmap::relief_polarity::random;
+  tacmap::localization_experiment experiment(gecko(), config);
+  int dark = 0;
+  for (std::size_t q = 0; q < 10; ++q) {
+    const auto a = experiment.run(q);
+    const auto b = experiment.run(q);
+    CHECK(a.raised_dark == b.raised_dark);  // fixed by (seed, sequence)
+    dark += a.raised_dark ? 1 : 0;
+    // The latent default reports which appearance it believes; after the last touch it should
+    // lean to the one drawn.
+    REQUIRE(a.touches.back().appearance_probability.size() == 2);
+    CHECK(a.touches.back().appearance_probability[a.raised_dark ? 1 : 0] > 0.5);
+  }
+  CHECK(dark > 0);
+  CHECK(dark < 10);
+  // The dark variant presses the inverted relief: high where the gecko map is dark.
+  tacmap::localization_config dark_config = config;
+  dark_config.scenario.polarity = tacmap::relief_polarity::dark_raised;
+  const tacmap::localization_experiment dark_experiment(gecko(), dark_config);
+  CHECK(dark_experiment.relief_mm()(0, 0) > 3.9F);  // the map's corner is the dark base
+  CHECK(experiment.relief_mm()(0, 0) < 0.1F);       // the bright variant: base at 0
+}

@@ -92,7 +92,9 @@ class latent_grid : public detail::circular_flags<G> {
   [[nodiscard]] Eigen::Index hypothesis_size() const { return base_.size(); }
   /// The name of hypothesis h.
   [[nodiscard]] const std::string& hypothesis_name(Eigen::Index h) const {
-    TACMAP_ASSERT(h >= 0 && h < hypotheses(), "hypothesis out of range");
+    if (h < 0 || h >= hypotheses())
+      detail::fail("latent_grid::hypothesis_name: hypothesis ", h, "; expected 0 .. ",
+                   hypotheses() - 1);
     return names_[static_cast<std::size_t>(h)];
   }
   [[nodiscard]] const std::vector<std::string>& hypothesis_names() const { return names_; }
@@ -114,12 +116,22 @@ concept latent_state_grid = state_grid<G> && requires(const G& g, Eigen::Index h
   { g.hypothesis_name(h) } -> std::convertible_to<const std::string&>;
 };
 
+namespace detail {
+template <class G, class Belief>
+void check_latent_belief(const char* who, const G& grid, const Belief& belief) {
+  if (belief.size() != grid.size())
+    fail(who, ": the belief has ", belief.size(), " values but the grid ", grid.size(), " (",
+         grid.hypotheses(), " hypotheses x ", grid.hypothesis_size(),
+         " states); expected the belief of a filter over this grid");
+}
+}  // namespace detail
+
 /// p(x) = sum_h bel(h, x): the belief over the base grid's states, whatever the hypothesis.
 template <latent_state_grid G>
 [[nodiscard]] belief_array<typename G::base_type> marginal_belief(const G& grid,
                                                                   const belief_array<G>& belief) {
+  detail::check_latent_belief("marginal_belief", grid, belief);
   const Eigen::Index n = grid.hypothesis_size();
-  TACMAP_ASSERT(belief.size() == grid.size(), "belief does not match the grid");
   belief_array<typename G::base_type> out = belief.head(n);
   for (Eigen::Index h = 1; h < grid.hypotheses(); ++h) out += belief.segment(h * n, n);
   return out;
@@ -129,8 +141,8 @@ template <latent_state_grid G>
 template <latent_state_grid G>
 [[nodiscard]] std::vector<double> hypothesis_posterior(const G& grid,
                                                        const belief_array<G>& belief) {
+  detail::check_latent_belief("hypothesis_posterior", grid, belief);
   const Eigen::Index n = grid.hypothesis_size();
-  TACMAP_ASSERT(belief.size() == grid.size(), "belief does not match the grid");
   std::vector<double> out(static_cast<std::size_t>(grid.hypotheses()));
   for (Eigen::Index h = 0; h < grid.hypotheses(); ++h)
     out[static_cast<std::size_t>(h)] = belief.segment(h * n, n).template cast<double>().sum();

@@ -81,10 +81,10 @@ enum class appearance {
 
 /// The tactile image `z` as hypothesis `a` expects the photograph to show it.
 [[nodiscard]] inline image<float> appearance_transform(const image<float>& z, appearance a) {
-  if (a == appearance::as_photographed || z.size() == 0) return z;
+  if (a == appearance::as_photographed) return z;
   // max + min - z maps [min, max] onto itself, reversed: the preprocessed range (peak 1) and
   // any contact-free taxels' level are kept, only the sign of every gradient flips.
-  return (z.maxCoeff() + z.minCoeff()) - z;
+  return detail::inverted_contrast(z);
 }
 
 /// The names a `latent_grid` gets for `hypotheses` (for `estimate()` and figures).
@@ -101,7 +101,8 @@ enum class appearance {
 }
 
 /// Measurement model over `latent_grid<G>`: hypothesis h's block gets `Model`'s log-likelihood of
-/// the tactile image under appearance h (see the file comment).
+/// the tactile image under appearance h (see the file comment). Keeps per-touch workspaces, like
+/// the shipped models: one object is not reentrant (one filter per thread).
 template <class Model>
 class appearance_likelihood {
  public:
@@ -143,7 +144,19 @@ class appearance_likelihood {
                    " hypotheses but the model ", hypotheses_.size(),
                    "; expected one grid hypothesis per appearance — build the latent_grid with "
                    "the model's hypothesis_names()");
+    for (std::size_t h = 0; h < hypotheses_.size(); ++h)
+      if (grid.hypothesis_name(static_cast<Eigen::Index>(h)) != to_string(hypotheses_[h]))
+        detail::fail("appearance_likelihood: the grid's hypothesis ", h, " is named '",
+                     grid.hypothesis_name(static_cast<Eigen::Index>(h)), "' but the model's is '",
+                     to_string(hypotheses_[h]),
+                     "'; expected the same order — build the latent_grid with the model's "
+                     "hypothesis_names()");
     const Eigen::Index n = grid.hypothesis_size();
+    // One hypothesis as photographed: the model itself, straight into the belief's buffer.
+    if (hypotheses_.size() == 1 && hypotheses_[0] == appearance::as_photographed) {
+      model_.log_likelihood(grid.base(), z, out);
+      return;
+    }
     if constexpr (measures_both_signs<Model, typename G::base_type>) {
       if (hypotheses_.size() == 2 && hypotheses_[0] == appearance::as_photographed &&
           hypotheses_[1] == appearance::inverted) {

@@ -247,6 +247,10 @@ class descriptor_likelihood {
     if (params.both_signs) {
       if constexpr (contrast_symmetric_descriptor<Descriptor>) {
         basis_ = detail::contrast_basis(descriptor_.contrast_permutation());
+        if (basis_.dimension() != descriptor_.dimension())
+          detail::fail("descriptor_likelihood: the descriptor's contrast_permutation() has ",
+                       basis_.dimension(), " elements but its dimension() is ",
+                       descriptor_.dimension(), "; expected one entry per descriptor element");
       } else {
         detail::fail(
             "descriptor_likelihood_params: both_signs = true, but this descriptor has no "
@@ -267,6 +271,7 @@ class descriptor_likelihood {
           static_cast<std::size_t>(m_count),
           detail::descriptor_tiles<scalar_type>(rows_ * cols_, field_.values.rows()));
       image<scalar_type> cut(window.height, window.width);
+      descriptor_matrix column(field_.values.rows(), 1);  // both_signs: one window patch
       for (Eigen::Index r = 0; r < rows_; ++r)
         for (Eigen::Index c = 0; c < cols_; ++c) {
           cut = map_t.block(r, c, window.height, window.width);
@@ -274,7 +279,6 @@ class descriptor_likelihood {
           for (Eigen::Index m = 0; m < m_count; ++m) {
             const grid_cell o = offsets_[static_cast<std::size_t>(m)];
             if (params.both_signs) {
-              descriptor_matrix column(wf.values.rows(), 1);
               basis_.apply(wf.at(o.row, o.col), column.col(0));
               per_window_[static_cast<std::size_t>(m)].set(r * cols_ + c, column.col(0));
             } else {
@@ -332,8 +336,8 @@ class descriptor_likelihood {
       // The inverted touch, described like the touch itself (no assumption about the
       // descriptor's layout). It keeps z's range, so a descriptor that divides by the peak
       // (dense_sift) sees the same scale.
-      const measurement_type inverted = (z.maxCoeff() + z.minCoeff()) - z;
-      const auto g_inverted = tactile_descriptors(inverted);
+      const measurement_type inverted = detail::inverted_contrast(z);
+      const auto g_inverted = in_stored_basis(tactile_descriptors(inverted));
       if (params_.features == window_features::per_window)
         per_window_distances(g, &g_inverted, out);
       else
@@ -428,7 +432,7 @@ class descriptor_likelihood {
       const requires std::same_as<typename G::scalar_type, scalar_type> {
     if (!params_.both_signs) {
       detail::check_tactile_image("descriptor_likelihood", z, window_);
-      const measurement_type images[2] = {z, (z.maxCoeff() + z.minCoeff()) - z};
+      const measurement_type images[2] = {z, detail::inverted_contrast(z)};
       log_likelihood_each(grid, std::span<const measurement_type>(images), out);
       return;
     }

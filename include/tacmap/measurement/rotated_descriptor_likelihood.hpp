@@ -40,13 +40,14 @@
 namespace tacmap {
 
 /// Configuration of `rotated_descriptor_likelihood`: the planar model's knobs (same meaning,
-/// same defaults except tau) without `features` — the map's features are always its dense field.
+/// same defaults) without `features` — the map's features are always its dense field.
 struct rotated_likelihood_params {
   Eigen::Index spacing = descriptor_likelihood_params{}.spacing;  ///< px between patches
   pairing pairs = descriptor_likelihood_params{}.pairs;
   likelihood_shape shape = descriptor_likelihood_params{}.shape;
   double epsilon = descriptor_likelihood_params{}.epsilon;
-  /// Exponential shape's temperature. 0.25, sharper than the planar model's 1: measured best
+  /// Exponential shape's temperature. 0.25 (the planar model's too, since the appearance
+  /// hypotheses): measured best
   /// with tacmap-evaluate at random orientations, 36 headings, classic_sift (ideal scenario:
   /// 81 of 88 sequences localized with 0.25, 81 with 0.5, 78 with 1; realistic: 63 with 0.25,
   /// 60 with 0.5 and with 0.125, 57 with 1; README "Unknown orientation").

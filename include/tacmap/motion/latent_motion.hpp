@@ -24,6 +24,7 @@
 #include <stdexcept>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/motion/concept.hpp"
@@ -38,6 +39,8 @@ struct latent_motion_params {
 };
 
 /// `Motion` (a motion model of the base grid) applied to every hypothesis of a `latent_grid`.
+/// Keeps per-call workspaces, like the base models: one object is not reentrant (one filter per
+/// thread).
 template <class Motion>
 class latent_motion {
  public:
@@ -75,6 +78,7 @@ class latent_motion {
     auto& block_out = scratch<T>(1);
     block_in.resize(n);
     block_out.resize(n);
+    kept_.assign(static_cast<std::size_t>(hypotheses), 0.0);
     double before = 0.0;
     double kept = 0.0;
     std::exception_ptr lost_everything;
@@ -99,8 +103,11 @@ class latent_motion {
         // This block's mass all left the grid; other blocks may still hold some.
         lost_everything = std::current_exception();
       }
-      out.segment(h * n, n) = block_out * static_cast<T>(block_kept);
-      if (!(block_kept > 0.0)) out.segment(h * n, n).setZero();
+      if (block_kept > 0.0)
+        out.segment(h * n, n) = block_out;  // normalised; weighted below
+      else
+        out.segment(h * n, n).setZero();
+      kept_[static_cast<std::size_t>(h)] = block_kept;
       kept += block_kept;
     }
     if (!(kept > 0.0)) {
@@ -108,6 +115,13 @@ class latent_motion {
       detail::fail<std::domain_error>("latent_motion: the motion left no belief mass in any of ",
                                       hypotheses, " hypotheses");
     }
+    // Each block back to its kept mass, relative to the largest (in double, so that a belief
+    // that almost entirely left the grid cannot underflow every block to 0 in float).
+    double largest = 0.0;
+    for (Eigen::Index h = 0; h < hypotheses; ++h)
+      largest = std::max(largest, kept_[static_cast<std::size_t>(h)]);
+    for (Eigen::Index h = 0; h < hypotheses; ++h)
+      out.segment(h * n, n) *= static_cast<T>(kept_[static_cast<std::size_t>(h)] / largest);
     if (s > 0.0) {
       // out_h <- (1 - s) out_h + s / (H - 1) (total - out_h), in place: a block-wise affine map.
       auto& total = block_out;
@@ -137,6 +151,7 @@ class latent_motion {
   // base models, one object is not reentrant.
   mutable Eigen::ArrayXf scratch_f_[2];
   mutable Eigen::ArrayXd scratch_d_[2];
+  mutable std::vector<double> kept_;  // per hypothesis: the mass its block kept
 };
 
 }  // namespace tacmap

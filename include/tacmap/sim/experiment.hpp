@@ -504,7 +504,7 @@ class localization_experiment {
       sim_rng polarity_rng(scenario_seed(config_.simulator_seed ^ 0xA0761D6478BD642FULL, index));
       dark = polarity_rng.uniform() < 0.5;
     }
-    variant& v = *variants_[dark ? 1 : 0];
+    polarity_setup& v = *variants_[dark ? 1 : 0];
     sequence_result result = v.filter ? run_on(*v.filter, v, index, keep_images)
                                       : run_on(*v.pose_filter, v, index, keep_images);
     result.raised_dark = dark;
@@ -514,7 +514,7 @@ class localization_experiment {
  private:
   // Everything that depends on the object's polarity: its relief, the camera's map of it, and
   // the filter whose measurement model was built from that map.
-  struct variant {
+  struct polarity_setup {
     image<float> relief;                // mm, the object's height
     image<float> visual_map;            // what the camera shows (the protocol's image when ideal)
     image<float> pressed_relief;        // relief padded by margin_px_ for moved or turned presses
@@ -522,12 +522,12 @@ class localization_experiment {
     std::optional<pose_filter_type> pose_filter;  // headings > 0
   };
 
-  [[nodiscard]] const variant& first() const {
+  [[nodiscard]] const polarity_setup& first() const {
     return variants_[0] ? *variants_[0] : *variants_[1];
   }
 
   void build_variant(std::size_t which) {
-    variant v;
+    polarity_setup v;
     const int sign = which == 0 ? 1 : -1;
     v.relief = object_relief(protocol_->map, protocol_->relief, config_.scenario, sign,
                              scenario_seed(config_.simulator_seed ^ 0x2545F4914F6CDD1DULL, 0));
@@ -576,7 +576,8 @@ class localization_experiment {
   }
 
   template <class Filter>
-  sequence_result run_on(Filter& filter, const variant& v, std::size_t index, bool keep_images) {
+  sequence_result run_on(Filter& filter, const polarity_setup& v, std::size_t index,
+                         bool keep_images) {
     constexpr bool pose = Filter::grid_type::dimension == 3;
     const touch_sequence& sequence = protocol_->sequences[index];
     // Each sequence gets its own noise stream, fixed by (seed, index): runs are reproducible
@@ -722,7 +723,7 @@ class localization_experiment {
   localization_config config_;
   pixel_size window_;
   Eigen::Index margin_px_;
-  std::array<std::optional<variant>, 2> variants_;  // [0]: raised bright, [1]: raised dark
+  std::array<std::optional<polarity_setup>, 2> variants_;  // [0]: raised bright, [1]: raised dark
 };
 
 }  // namespace tacmap
