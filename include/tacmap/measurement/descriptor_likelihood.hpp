@@ -402,18 +402,9 @@ class descriptor_likelihood {
       // as sums of shifted columns (as shared_distances does for one).
       dist.resize(field_.rows * field_.cols, count * m_count);
       distance_columns(field_tiles_, all, dist);
-      for (Eigen::Index k = 0; k < count; ++k) {
-        Eigen::Map<image<scalar_type>> d(out + k * n, rows_, cols_);
-        for (Eigen::Index m = 0; m < m_count; ++m) {
-          const Eigen::Map<const image<scalar_type>> dn(&dist(0, k * m_count + m), field_.rows,
-                                                        field_.cols);
-          const grid_cell o = offsets_[static_cast<std::size_t>(m)];
-          if (m == 0)
-            d = dn.block(o.row, o.col, rows_, cols_);
-          else
-            d += dn.block(o.row, o.col, rows_, cols_);
-        }
-      }
+      for (Eigen::Index k = 0; k < count; ++k)
+        windows_from_columns(
+            dist, [&](Eigen::Index m) { return k * m_count + m; }, out + k * n);
     }
     for (Eigen::Index k = 0; k < count; ++k) {
       Eigen::Map<Eigen::Array<scalar_type, Eigen::Dynamic, 1>> block(out + k * n, n);
@@ -455,18 +446,9 @@ class descriptor_likelihood {
       for (Eigen::Index m = 0; m < m_count; ++m)
         detail::accumulate_sign_pair(field_tiles_, &g(0, m), half, &dist(0, m),
                                      &dist(0, m_count + m), false);
-      for (Eigen::Index sign = 0; sign < 2; ++sign) {
-        Eigen::Map<image<scalar_type>> d(out + sign * n, rows_, cols_);
-        for (Eigen::Index m = 0; m < m_count; ++m) {
-          const Eigen::Map<const image<scalar_type>> dn(&dist(0, sign * m_count + m), field_.rows,
-                                                        field_.cols);
-          const grid_cell o = offsets_[static_cast<std::size_t>(m)];
-          if (m == 0)
-            d = dn.block(o.row, o.col, rows_, cols_);
-          else
-            d += dn.block(o.row, o.col, rows_, cols_);
-        }
-      }
+      for (Eigen::Index sign = 0; sign < 2; ++sign)
+        windows_from_columns(
+            dist, [&](Eigen::Index m) { return sign * m_count + m; }, out + sign * n);
     }
     for (Eigen::Index sign = 0; sign < 2; ++sign)
       to_log_likelihood(
@@ -602,11 +584,21 @@ class descriptor_likelihood {
       for (Eigen::Index n = 0; n < m_count; ++n)
         dist.col(n).head(used) = dist.col(n).head(used).min(dist.col(m_count + n).head(used));
     }
-    Eigen::Map<image<scalar_type>> d(out.data(), rows_, cols_);
-    for (Eigen::Index m = 0; m < m_count; ++m) {
-      // sum_m sum_n D_n(x + o_m) = sum_m S(x + o_m); aligned: sum_m D_m(x + o_m).
-      const Eigen::Index n = params_.pairs == pairing::all_pairs ? 0 : m;
-      const Eigen::Map<const image<scalar_type>> dn(&dist(0, n), field_.rows, field_.cols);
+    // sum_m sum_n D_n(x + o_m) = sum_m S(x + o_m); aligned: sum_m D_m(x + o_m).
+    const bool summed = params_.pairs == pairing::all_pairs;
+    windows_from_columns(
+        dist, [&](Eigen::Index m) { return summed ? 0 : m; }, out.data());
+  }
+
+  // Shared dense features: every window's distance as the sum over its patches m of the dense
+  // distance column `column(m)` of `dist`, read at the window's position shifted by patch m's
+  // offset (the field is field_.rows x field_.cols, row-major, in each column); into `out`
+  // (rows_ x cols_, row-major).
+  template <class Column>
+  void windows_from_columns(const descriptor_matrix& dist, Column column, scalar_type* out) const {
+    Eigen::Map<image<scalar_type>> d(out, rows_, cols_);
+    for (Eigen::Index m = 0; m < patches_per_window(); ++m) {
+      const Eigen::Map<const image<scalar_type>> dn(&dist(0, column(m)), field_.rows, field_.cols);
       const grid_cell o = offsets_[static_cast<std::size_t>(m)];
       if (m == 0)
         d = dn.block(o.row, o.col, rows_, cols_);
