@@ -2,6 +2,7 @@
 // model.
 #include <doctest/doctest.h>
 
+#include "ranked_first.hpp"
 #include "tacmap/descriptor/dense_sift.hpp"
 #include "tacmap/testing/conformance.hpp"
 
@@ -22,17 +23,7 @@ TEST_CASE_TEMPLATE(
   for (const tacmap::pairing pairs : {tacmap::pairing::aligned, tacmap::pairing::all_pairs}) {
     const tacmap::descriptor_likelihood<D> model(D{}, map, grid.window_size(), {.pairs = pairs});
     REQUIRE(model.patches_per_window() == 3);  // the paper: three descriptors per 42 x 18 image
-    Eigen::ArrayXf ll(grid.size());
-    int first = 0;
-    int tried = 0;
-    for (Eigen::Index row = 1; row < grid.rows(); row += 6)
-      for (Eigen::Index col = 2; col < grid.cols(); col += 8) {
-        model.log_likelihood(grid, map.block(row, col, 42, 18), ll);
-        Eigen::Index best = 0;
-        ll.maxCoeff(&best);
-        first += best == grid.index({row, col}) ? 1 : 0;
-        ++tried;
-      }
+    const auto [first, tried] = tacmap_test::ranked_first(model, grid, map);
     CAPTURE(static_cast<int>(pairs));
     CAPTURE(first);
     CAPTURE(tried);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "blob_images.hpp"
+#include "ranked_first.hpp"
 #include "tacmap/descriptor/dense_sift.hpp"
 #include "tacmap/descriptor/unsigned_orientation.hpp"
 #include "tacmap/measurement/rotated_descriptor_likelihood.hpp"
@@ -167,17 +168,7 @@ TEST_CASE("descriptor_likelihood with unsigned SIFT-lite finds a touch cut from 
                                             grid.window_size(),
                                             {.pairs = tacmap::pairing::aligned});
   REQUIRE(model.patches_per_window() == 3);
-  Eigen::ArrayXf ll(grid.size());
-  int first = 0;
-  int tried = 0;
-  for (Eigen::Index row = 1; row < grid.rows(); row += 6)
-    for (Eigen::Index col = 2; col < grid.cols(); col += 8) {
-      model.log_likelihood(grid, touch_map.block(row, col, 42, 18), ll);
-      Eigen::Index best = 0;
-      ll.maxCoeff(&best);
-      first += best == grid.index({row, col}) ? 1 : 0;
-      ++tried;
-    }
+  const auto [first, tried] = tacmap_test::ranked_first(model, grid, touch_map);
   CAPTURE(first);
   CAPTURE(tried);
   CHECK(first == tried);

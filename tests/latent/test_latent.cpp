@@ -290,6 +290,16 @@ TEST_CASE("appearance_likelihood: hypotheses must match the grid's, named in the
   tacmap::belief_array<latent> out(three.size());
   const auto m = message_of([&] { two.log_likelihood(three, map.block(0, 0, 42, 18), out); });
   CHECK(m.find("the grid has 3 hypotheses but the model 2") != std::string::npos);
+  // The right count in another order would report posteriors under the wrong names.
+  const latent swapped(positions, {"inverted", "as photographed"});
+  tacmap::belief_array<latent> out2(swapped.size());
+  CHECK(message_of([&] {
+          two.log_likelihood(swapped, map.block(0, 0, 42, 18), out2);
+        }).find("hypothesis 0 is named 'inverted' but the model's is 'as photographed'") !=
+        std::string::npos);
+  CHECK(message_of([&] {
+          (void)tacmap::marginal_belief(swapped, Eigen::ArrayXf(7));
+        }).find("the belief has 7 values but the grid") != std::string::npos);
   CHECK(message_of([&] {
           tacmap::appearance_likelihood<model_t>(
               model_t(map, window), {tacmap::appearance::inverted, tacmap::appearance::inverted});
@@ -480,20 +490,4 @@ TEST_CASE("latent_motion: one block's mass leaves the grid, another's stays") {
   CHECK(b_report.mass_lost < 0.2);
   CHECK(report.mass_lost == doctest::Approx(0.3 + 0.7 * b_report.mass_lost).epsilon(1e-4));
   CHECK((out.tail(20) - b_out).abs().maxCoeff() < 1e-6F);
-}
-
-TEST_CASE("appearance_likelihood: a grid whose hypotheses are in another order is refused") {
-  const tacmap::image<float> map = blob_map(50, 30, 2);
-  const tacmap::pixel_size window{.width = 18, .height = 42};
-  const planar positions({.width = 30, .height = 50}, 1.0, window);
-  using model_t = tacmap::ncc_likelihood<float>;
-  const tacmap::appearance_likelihood<model_t> model(model_t(map, window));
-  const latent swapped(positions, {"inverted", "as photographed"});
-  tacmap::belief_array<latent> out(swapped.size());
-  const auto m = message_of([&] { model.log_likelihood(swapped, map.block(0, 0, 42, 18), out); });
-  CHECK(m.find("hypothesis 0 is named 'inverted' but the model's is 'as photographed'") !=
-        std::string::npos);
-  CHECK(message_of([&] {
-          (void)tacmap::marginal_belief(swapped, Eigen::ArrayXf(7));
-        }).find("the belief has 7 values but the grid") != std::string::npos);
 }
