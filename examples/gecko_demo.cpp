@@ -155,11 +155,11 @@ void write_figure(const std::filesystem::path& png, const tacmap::sequence_resul
       blit_grey(fig, tact, y_tact, tx, ts);
     else
       blit_grey(fig, tacmap::image<float>::Constant(win.height, win.width, 0.5F), y_tact, tx, ts);
-    // Map with the true window (green) and the MAP window (red).
+    // Map with the true window (green) and the estimate's window (red).
     blit_grey(fig, map, y_map, x, s, 0.8F);
     const double ww = static_cast<double>(win.width), wh = static_cast<double>(win.height);
-    draw_rect(fig, y_map, x, s, t.map_x_mm / mm - ww / 2, t.map_y_mm / mm - wh / 2, ww, wh, 0.9F,
-              0.1F, 0.1F);
+    draw_rect(fig, y_map, x, s, t.estimate_x_mm / mm - ww / 2, t.estimate_y_mm / mm - wh / 2, ww,
+              wh, 0.9F, 0.1F, 0.1F);
     draw_rect(fig, y_map, x, s, t.true_x_mm / mm - ww / 2, t.true_y_mm / mm - wh / 2, ww, wh, 0.1F,
               0.8F, 0.1F);
     // Belief heat map over the (dimmed) map: state (r, c) is drawn at its window centre.
@@ -203,15 +203,17 @@ void write_figure(const std::filesystem::path& png, const tacmap::sequence_resul
 }
 
 void print_run(const tacmap::sequence_result& run) {
-  std::printf("%5s %9s %20s %20s %9s %13s %14s\n", "touch", "location", "true (x, y) mm",
-              "estimate (x, y) mm", "error mm", "entropy nats", "P(raised dark)");
+  std::printf("%5s %9s %20s %20s %9s %13s %14s %16s\n", "touch", "location", "true (x, y) mm",
+              "estimate (x, y) mm", "error mm", "entropy nats", "P(raised dark)",
+              "P(error <= 5 mm)");
   for (const auto& t : run.touches) {
     char dark[16] = "-";
     if (t.appearance_probability.size() == 2)
       std::snprintf(dark, sizeof dark, "%.3f", t.appearance_probability[1]);
-    std::printf("%5zu %9zu %9.1f, %8.1f  %9.1f, %8.1f  %9.2f %13.3f %14s%s\n", t.step + 1,
-                t.location, t.true_x_mm, t.true_y_mm, t.map_x_mm, t.map_y_mm, t.error_mm,
-                t.entropy_nats, dark, t.accepted ? "" : "   (frame rejected)");
+    std::printf("%5zu %9zu %9.1f, %8.1f  %9.1f, %8.1f  %9.2f %13.3f %14s %8.3f %-11s%s\n",
+                t.step + 1, t.location, t.true_x_mm, t.true_y_mm, t.estimate_x_mm, t.estimate_y_mm,
+                t.error_mm, t.entropy_nats, dark, t.probability_within,
+                tacmap::to_string(t.verdict), t.accepted ? "" : "   (frame rejected)");
   }
   const auto ttl = tacmap::touches_to_localize(run.touches);
   if (ttl)

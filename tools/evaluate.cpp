@@ -24,32 +24,6 @@
 //   tacmap-evaluate --photo camera.png --model sift_lite,ncc --output eval.csv
 //   tacmap-evaluate --scenario realistic --model ncc --tau 0.05,0.1,0.2
 #include <CLI/CLI.hpp>
-
-#define STB_IMAGE_IMPLEMENTATION
-#define STBI_ONLY_PNG
-#define STBI_ONLY_JPEG
-#define STBI_ONLY_PNM
-#define STBI_NO_HDR
-#define STBI_NO_LINEAR
-#if defined(__GNUC__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wconversion"
-#pragma GCC diagnostic ignored "-Wsign-conversion"
-#pragma GCC diagnostic ignored "-Wold-style-cast"
-#pragma GCC diagnostic ignored "-Wshadow"
-#pragma GCC diagnostic ignored "-Wunused-function"
-#pragma GCC diagnostic ignored "-Wdouble-promotion"
-#pragma GCC diagnostic ignored "-Wcast-qual"
-#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
-#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
-#pragma GCC diagnostic ignored "-Wuseless-cast"
-#pragma GCC diagnostic ignored "-Wpedantic"
-#endif
-#include <stb/stb_image.h>
-#if defined(__GNUC__)
-#pragma GCC diagnostic pop
-#endif
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -64,6 +38,8 @@
 #include <string>
 #include <vector>
 
+#include "photo_maps.hpp"
+#include "tacmap/sim/calibration.hpp"
 #include "tacmap/sim/experiment.hpp"
 #include "tacmap/sim/protocol.hpp"
 #include "tacmap/sim/random.hpp"
@@ -76,90 +52,7 @@
 namespace {
 
 using tacmap::image;
-
-// A photograph as grey intensities in [0, 1] (stb_image's own grey conversion).
-image<float> load_photo(const std::string& path) {
-  int w = 0, h = 0, channels = 0;
-  std::unique_ptr<unsigned char, void (*)(void*)> pixels(
-      stbi_load(path.c_str(), &w, &h, &channels, 1), stbi_image_free);
-  if (!pixels)
-    tacmap::detail::fail("tacmap-evaluate: cannot read the photograph '", path, "' (",
-                         stbi_failure_reason(),
-                         "); expected a readable PNG, JPEG or PGM file — check the path");
-  image<float> out(h, w);
-  for (Eigen::Index r = 0; r < h; ++r)
-    for (Eigen::Index c = 0; c < w; ++c)
-      out(r, c) = static_cast<float>(pixels.get()[r * w + c]) / 255.0F;
-  return out;
-}
-
-// Area-average resize: each output pixel is the mean of the source area it covers (fractional
-// overlaps weighted), so shrinking a photograph does not alias.
-image<float> resize_area(const image<float>& src, Eigen::Index rows, Eigen::Index cols) {
-  const double sy = static_cast<double>(src.rows()) / static_cast<double>(rows);
-  const double sx = static_cast<double>(src.cols()) / static_cast<double>(cols);
-  // Weights of the source indices each output index covers, per axis.
-  const auto weights = [](Eigen::Index n_out, double scale, Eigen::Index n_src) {
-    std::vector<std::vector<std::pair<Eigen::Index, double>>> w(static_cast<std::size_t>(n_out));
-    for (Eigen::Index o = 0; o < n_out; ++o) {
-      const double a = static_cast<double>(o) * scale, b = a + scale;
-      for (auto s = static_cast<Eigen::Index>(std::floor(a));
-           s < n_src && static_cast<double>(s) < b; ++s) {
-        const double overlap =
-            std::min(b, static_cast<double>(s + 1)) - std::max(a, static_cast<double>(s));
-        if (overlap > 0) w[static_cast<std::size_t>(o)].push_back({s, overlap / scale});
-      }
-    }
-    return w;
-  };
-  const auto wy = weights(rows, sy, src.rows());
-  const auto wx = weights(cols, sx, src.cols());
-  image<float> out(rows, cols);
-  for (Eigen::Index r = 0; r < rows; ++r)
-    for (Eigen::Index c = 0; c < cols; ++c) {
-      double sum = 0, total = 0;
-      for (const auto& [y, a] : wy[static_cast<std::size_t>(r)])
-        for (const auto& [x, b] : wx[static_cast<std::size_t>(c)]) {
-          sum += a * b * src(y, x);
-          total += a * b;
-        }
-      out(r, c) = static_cast<float>(sum / total);
-    }
-  return out;
-}
-
-// A photograph's protocol: 7 touch locations on pixel-aligned states, 22 random orders, measured
-// odometry = true motion + N(0, 0.5 mm) per axis (the gecko protocol's noise), from `seed`.
-tacmap::touch_protocol photo_protocol(const std::string& path, std::uint64_t seed) {
-  tacmap::touch_protocol p;
-  p.map_file = path;
-  p.map = resize_area(load_photo(path), 120, 120);
-  p.mm_per_px = 3.4 / 3.0;
-  p.relief = {.kind = tacmap::relief_kind::continuous,
-              .threshold = 0.5F,
-              .height_mm = 4.0,
-              .edge_smoothing_px = 0.0};
-  p.odometry_sigma_mm = 0.5;
-  p.seed = seed;
-  const tacmap::planar_grid<float> grid(p.map_size(), p.mm_per_px,
-                                        tacmap::tactile_window({}, p.mm_per_px));
-  tacmap::sim_rng rng(seed);
-  while (p.locations.size() < 7) {  // 7 distinct states
-    const auto s = grid.state_mm(
-        static_cast<Eigen::Index>(rng.below(static_cast<std::uint64_t>(grid.size()))));
-    const tacmap::touch_location loc{s(0), s(1)};
-    if (std::find(p.locations.begin(), p.locations.end(), loc) == p.locations.end())
-      p.locations.push_back(loc);
-  }
-  const std::size_t n = p.locations.size();
-  for (int q = 0; q < 22; ++q) {
-    std::vector<std::size_t> order(n);
-    for (std::size_t k = 0; k < n; ++k) order[k] = k;
-    for (std::size_t k = n - 1; k > 0; --k) std::swap(order[k], order[rng.below(k + 1)]);
-    p.sequences.push_back(tacmap::sequence_visiting(p.locations, order, p.odometry_sigma_mm, rng));
-  }
-  return p;
-}
+using tacmap_tools::photo_protocol;
 
 struct named_map {
   std::string name;
@@ -189,6 +82,88 @@ void progress(std::size_t done, std::size_t total, const std::string& label) {
   std::fprintf(stderr, "\r[%s%s] %zu/%zu %-60.60s", std::string(filled, '#').c_str(),
                std::string(width - filled, ' ').c_str(), done, total, label.c_str());
   std::fflush(stderr);
+}
+
+// The belief's claims against what happened, over every touch of every sequence of one
+// configuration (README, "Confidence").
+struct confidence_tally {
+  std::vector<double> within, heading, appearance;  // claimed probabilities
+  std::vector<char> within_ok, heading_ok, appearance_ok;
+  // Per touch number: touches with the estimate right (error < 5 mm), called localized, both.
+  std::vector<std::size_t> right, said, said_and_right;
+
+  void add(const tacmap::sequence_result& run, bool pose) {
+    constexpr double radius_mm = 5.0;
+    const double tolerance = tacmap::confidence_params{}.heading_tolerance_rad;
+    for (const auto& r : run.touches) {
+      const bool ok = r.error_mm <= radius_mm;
+      within.push_back(r.probability_within);
+      within_ok.push_back(ok ? 1 : 0);
+      if (pose) {
+        heading.push_back(r.heading_probability);
+        heading_ok.push_back(
+            std::abs(tacmap::wrap_angle(r.map_theta_rad - r.true_theta_rad)) <= tolerance ? 1 : 0);
+      }
+      if (r.appearance_probability.size() == 2) {
+        const std::size_t said_h =
+            r.appearance_probability[1] > r.appearance_probability[0] ? 1 : 0;
+        appearance.push_back(r.appearance_probability[said_h]);
+        appearance_ok.push_back(said_h == (run.raised_dark ? 1U : 0U) ? 1 : 0);
+      }
+      if (right.size() <= r.step) {
+        right.resize(r.step + 1);
+        said.resize(r.step + 1);
+        said_and_right.resize(r.step + 1);
+      }
+      const bool localized = r.verdict == tacmap::verdict::localized;
+      right[r.step] += ok ? 1U : 0U;
+      said[r.step] += localized ? 1U : 0U;
+      said_and_right[r.step] += ok && localized ? 1U : 0U;
+    }
+  }
+};
+
+std::string percent(std::size_t k, std::size_t n) {
+  if (n == 0) return "-";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f", 100.0 * static_cast<double>(k) / static_cast<double>(n));
+  return buf;
+}
+
+std::string ece_text(const std::vector<double>& p, const std::vector<char>& ok) {
+  if (p.empty()) return "-";
+  const auto r = tacmap::reliability(p, ok);
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f", 100.0 * r.expected_calibration_error);
+  return buf;
+}
+
+// Second table: per configuration, over every map — the expected calibration error (points) of
+// the belief's P(error <= 5 mm), of its heading and appearance claims, and the precision and
+// recall of its "localized" verdict (confidence_params defaults) by touch number.
+void print_confidence(const std::map<std::string, confidence_tally>& tallies,
+                      const std::vector<tacmap::localization_config>& configs) {
+  std::printf(
+      "\n| configuration | touches | ECE P(error <= 5 mm), points | ECE heading | ECE "
+      "appearance | \"localized\": precision %% | recall %% at touch 1, 2, ... |\n"
+      "|---|---|---|---|---|---|---|\n");
+  for (const auto& config : configs) {
+    const auto it = tallies.find(config.name());
+    if (it == tallies.end()) continue;
+    const confidence_tally& t = it->second;
+    std::size_t said = 0, said_right = 0;
+    std::string recall;
+    for (std::size_t k = 0; k < t.right.size(); ++k) {
+      said += t.said[k];
+      said_right += t.said_and_right[k];
+      recall += (k == 0 ? "" : ", ") + percent(t.said_and_right[k], t.right[k]);
+    }
+    std::printf("| %s | %zu | %s | %s | %s | %s (%zu of %zu) | %s |\n", config.name().c_str(),
+                t.within.size(), ece_text(t.within, t.within_ok).c_str(),
+                ece_text(t.heading, t.heading_ok).c_str(),
+                ece_text(t.appearance, t.appearance_ok).c_str(), percent(said_right, said).c_str(),
+                said_right, said, recall.c_str());
+  }
 }
 
 }  // namespace
@@ -512,7 +487,8 @@ int main(int argc, char** argv) try {
                                              "' for writing; check the folder exists");
   csv << "map,config,model,pairing,shape,features,sequence,touch,location,true_x_mm,true_y_mm,"
          "map_x_mm,map_y_mm,error_mm,entropy_nats,accepted,localized,touches_to_localize,scenario,"
-         "tau,headings,true_theta_rad,map_theta_rad,raised_dark,p_inverted\n";
+         "tau,headings,true_theta_rad,map_theta_rad,raised_dark,p_inverted,p_within_5mm,"
+         "p_heading,verdict,log_evidence,estimate_x_mm,estimate_y_mm,map_error_mm\n";
 
   std::size_t total = 0;
   for (const auto& m : maps) {
@@ -521,6 +497,7 @@ int main(int argc, char** argv) try {
   }
   std::size_t done = 0;
   bool below_floor = false;
+  std::map<std::string, confidence_tally> confidence;  // per configuration, over every map
   std::fprintf(stderr, "scenario: %s\n", to_string(scenario));
   std::printf(
       "| map | configuration | localized | median touches to localize | median final error mm | "
@@ -571,7 +548,11 @@ int main(int argc, char** argv) try {
               << (run.raised_dark ? 1 : 0) << ','
               << (r.appearance_probability.size() == 2 ? csv_number(r.appearance_probability[1])
                                                        : std::string())
-              << '\n';
+              << ',' << csv_number(r.probability_within) << ',' << csv_number(r.heading_probability)
+              << ',' << tacmap::to_string(r.verdict) << ',' << csv_number(r.log_marginal_likelihood)
+              << ',' << csv_number(r.estimate_x_mm) << ',' << csv_number(r.estimate_y_mm) << ','
+              << csv_number(r.map_error_mm) << '\n';
+        confidence[config.name()].add(run, config.headings > 0);
         ++done;
         if (!quiet) progress(done, total, m.name + " " + config.name());
       }
@@ -590,6 +571,7 @@ int main(int argc, char** argv) try {
         below_floor = true;
     }
   }
+  print_confidence(confidence, configs);
   csv.close();
   if (!csv)
     tacmap::detail::fail<std::runtime_error>("tacmap-evaluate: writing '", output, "' failed");

@@ -6,6 +6,7 @@
 #include "tacmap/config.hpp"
 #include "tacmap/descriptor/concept.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/filter/confidence.hpp"
 #include "tacmap/grid/concept.hpp"
 #include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/grid/planar_grid.hpp"

@@ -99,8 +99,14 @@ TEST_CASE("localization_experiment: a gecko sequence end to end (NCC, fast in De
     CHECK(rec.location == seq[t].location);
     CHECK(rec.true_x_mm == gecko().locations[seq[t].location].x_mm);
     CHECK(rec.true_y_mm == gecko().locations[seq[t].location].y_mm);
-    CHECK(rec.error_mm ==
+    // The error is the confidence estimate's (the most probable 5 mm disc); the MAP's is kept.
+    CHECK(rec.error_mm == doctest::Approx(std::hypot(rec.estimate_x_mm - rec.true_x_mm,
+                                                     rec.estimate_y_mm - rec.true_y_mm)));
+    CHECK(rec.map_error_mm ==
           doctest::Approx(std::hypot(rec.map_x_mm - rec.true_x_mm, rec.map_y_mm - rec.true_y_mm)));
+    CHECK(rec.probability_within >= 0.0);
+    CHECK(rec.probability_within <= 1.0 + 1e-6);
+    CHECK((rec.verdict == tacmap::verdict::localized) == (rec.probability_within >= 0.9));
     CHECK(rec.entropy_nats >= 0.0);
     CHECK(r.beliefs[t].rows() == experiment.filter().grid().rows());
     CHECK(r.beliefs[t].cols() == experiment.filter().grid().cols());

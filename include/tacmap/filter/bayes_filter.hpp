@@ -60,6 +60,14 @@ struct update_report {
   /// maximum: 0 when the prediction put all its mass on the best-matching states, very negative
   /// when the measurement contradicts the prediction (a hint of a bad touch or bad odometry).
   double log_evidence = 0.0;
+  /// The largest log-likelihood of the touch, max_x log p(z | x), in the model's own units.
+  double log_likelihood_max = 0.0;
+  /// log p(z_t | z_1..t-1) = log sum_x p(z | x) bel_bar(x) in the model's units: the evidence of
+  /// the whole touch. Summed over a sequence it is the log marginal likelihood of the data under
+  /// the filter, so two filters whose models share a likelihood scale (the same descriptor and
+  /// tau, e.g. on two different maps) are compared by the difference of their sums: the log
+  /// Bayes factor. Meaningful as a probability only with a calibrated scale (tacmap-calibrate).
+  [[nodiscard]] double log_marginal_likelihood() const { return log_likelihood_max + log_evidence; }
 };
 
 /// Grids that flag some coordinates as angles: `static constexpr std::array<bool, dimension>
@@ -102,6 +110,7 @@ class bayes_filter {
     // A latent grid repeats its positions in every hypothesis block: the first block's suffice.
     for (Eigen::Index i = 0; i < offsets_mm_.cols(); ++i)
       offsets_mm_.col(i) = grid_.state_mm(i) - origin_mm_;
+    if constexpr (Grid::dimension >= 2) lattice_step_ = lattice_step();
     reset();
   }
 
@@ -133,7 +142,7 @@ class bayes_filter {
     if (!(total > 0.0 && std::isfinite(total)))
       detail::fail("bayes_filter::set_prior: the prior sums to ", total,
                    "; expected a positive, finite total (it is normalised for you)");
-    scratch_ *= static_cast<scalar_type>(1.0 / total);
+    normalise(scratch_, total);
     belief_.swap(scratch_);
   }
 
@@ -148,7 +157,7 @@ class bayes_filter {
           "bayes_filter::predict: the motion model returned a belief summing to ", total,
           " (or with negative values); expected finite probabilities >= 0 with a positive sum. "
           "The belief is unchanged; check the motion model");
-    scratch_ *= static_cast<scalar_type>(1.0 / total);
+    normalise(scratch_, total);
     belief_.swap(scratch_);
     return report;
   }
@@ -245,6 +254,124 @@ class bayes_filter {
     return e;
   }
 
+  /// The belief's probability that the sensor's position (x, y) lies within `radius_mm` of
+  /// `center_mm` (map frame, mm), whatever its heading or latent hypothesis: the mass of the
+  /// states whose centres are at most `radius_mm` away. With `center_mm` the estimate, this is
+  /// the belief's own claim that the estimate is within `radius_mm` of the truth — calibrated
+  /// when it matches how often that is so (README, "Confidence"). Throws std::invalid_argument
+  /// for a non-finite centre or a radius that is negative or not finite.
+  [[nodiscard]] double probability_within(const Eigen::Vector2d& center_mm, double radius_mm) const
+      requires(Grid::dimension >= 2) {
+    if (!center_mm.allFinite())
+      detail::fail("bayes_filter::probability_within: centre (", center_mm(0), ", ", center_mm(1),
+                   ") mm; expected finite map coordinates");
+    if (!(std::isfinite(radius_mm) && radius_mm >= 0.0))
+      detail::fail("bayes_filter::probability_within: radius ", radius_mm,
+                   " mm; expected a finite radius >= 0");
+    const Eigen::Vector2d c = center_mm - origin_mm_.template head<2>();
+    const double r2 = radius_mm * radius_mm;
+    return masked_mass([&](Eigen::Index i) {
+      return (offsets_mm_.col(i).template head<2>() - c).squaredNorm() <= r2;
+    });
+  }
+
+  /// The position whose disc of `radius_mm` holds the most belief (x, y; whatever the heading
+  /// or latent hypothesis: the belief's mean inside the best disc of the lattice), and the mass
+  /// of its disc: the estimate most probably within `radius_mm` of the truth, and the belief's
+  /// probability that it is. Where the MAP state is one sharp peak the
+  /// two agree; where the belief is spread over a region (a smooth map, a repeated texture)
+  /// the disc's centre sits where most of the mass is, not on the highest single state. The
+  /// grid's positions must form a regular lattice (planar_grid, pose_grid: one state per map
+  /// pixel); throws std::logic_error otherwise, std::invalid_argument for a radius that is
+  /// negative or not finite.
+  [[nodiscard]] std::pair<Eigen::Vector2d, double> most_probable_disc(double radius_mm) const
+      requires(Grid::dimension >= 2) {
+    if (!(std::isfinite(radius_mm) && radius_mm >= 0.0))
+      detail::fail("bayes_filter::most_probable_disc: radius ", radius_mm,
+                   " mm; expected a finite radius >= 0");
+    const Eigen::Index rows = grid_.rows(), cols = grid_.cols(), plane = rows * cols;
+    if (!positions_form_lattice())
+      detail::fail<std::logic_error>(
+          "bayes_filter::most_probable_disc: the grid's positions are not an axis-aligned regular "
+          "lattice (as planar_grid's and pose_grid's are); use probability_within instead");
+    // Position marginal, then per-row prefix sums: the disc is a stack of row runs.
+    image<double> p = image<double>::Zero(rows, cols);
+    for (Eigen::Index i = 0; i < belief_.size(); ++i) {
+      const Eigen::Index k = i % plane;
+      p(k / cols, k % cols) += static_cast<double>(belief_(i));
+    }
+    image<double> prefix(rows, cols + 1);
+    prefix.col(0).setZero();
+    for (Eigen::Index c = 0; c < cols; ++c) prefix.col(c + 1) = prefix.col(c) + p.col(c);
+    const double sx = std::abs(lattice_step_(0)), sy = std::abs(lattice_step_(1));
+    const auto reach_r = static_cast<Eigen::Index>(std::floor(radius_mm / sy + 1e-9));
+    std::vector<Eigen::Index> half(static_cast<std::size_t>(reach_r + 1));
+    for (Eigen::Index dr = 0; dr <= reach_r; ++dr) {
+      const double dy = static_cast<double>(dr) * sy;
+      half[static_cast<std::size_t>(dr)] = static_cast<Eigen::Index>(
+          std::floor(std::sqrt(std::max(0.0, radius_mm * radius_mm - dy * dy)) / sx + 1e-9));
+    }
+    double best = -1.0;
+    Eigen::Index best_r = 0, best_c = 0;
+    for (Eigen::Index r = 0; r < rows; ++r)
+      for (Eigen::Index c = 0; c < cols; ++c) {
+        double mass = 0.0;
+        for (Eigen::Index dr = -reach_r; dr <= reach_r; ++dr) {
+          const Eigen::Index rr = r + dr;
+          if (rr < 0 || rr >= rows) continue;
+          const Eigen::Index h = half[static_cast<std::size_t>(dr < 0 ? -dr : dr)];
+          mass +=
+              prefix(rr, std::min(cols, c + h + 1)) - prefix(rr, std::max<Eigen::Index>(0, c - h));
+        }
+        if (mass > best) {
+          best = mass;
+          best_r = r;
+          best_c = c;
+        }
+      }
+    // Discs around a sharp peak all hold (nearly) the same mass, and the scan keeps the first:
+    // the centre is the mean of the belief inside the best disc instead, which sits on the
+    // peak (or the middle of a plateau), and the probability is that of its own disc.
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    double inside = 0.0;
+    for (Eigen::Index dr = -reach_r; dr <= reach_r; ++dr) {
+      const Eigen::Index rr = best_r + dr;
+      if (rr < 0 || rr >= rows) continue;
+      const Eigen::Index h = half[static_cast<std::size_t>(dr < 0 ? -dr : dr)];
+      for (Eigen::Index cc = std::max<Eigen::Index>(0, best_c - h);
+           cc <= std::min(cols - 1, best_c + h); ++cc) {
+        sum += p(rr, cc) * offsets_mm_.col(rr * cols + cc).template head<2>();
+        inside += p(rr, cc);
+      }
+    }
+    const Eigen::Vector2d centre =
+        origin_mm_.template head<2>() +
+        (inside > 0.0
+             ? Eigen::Vector2d(sum / inside)
+             : Eigen::Vector2d(offsets_mm_.col(best_r * cols + best_c).template head<2>()));
+    return {centre, probability_within(centre, radius_mm)};
+  }
+
+  /// True when the grid's positions form an axis-aligned regular lattice (planar_grid,
+  /// pose_grid): what `most_probable_disc` needs.
+  [[nodiscard]] bool positions_form_lattice() const { return lattice_step_.allFinite(); }
+
+  /// Grids with a heading (pose_grid): the belief's probability that the heading is within
+  /// `tolerance_rad` of `heading_rad`, the angle difference wrapped into [-pi, pi). Throws
+  /// std::invalid_argument for a non-finite heading or a negative or non-finite tolerance.
+  [[nodiscard]] double heading_probability_within(double heading_rad, double tolerance_rad) const
+      requires(Grid::dimension == 3 && has_circular_coordinates<Grid>) {
+    if (!std::isfinite(heading_rad))
+      detail::fail("bayes_filter::heading_probability_within: heading ", heading_rad,
+                   " rad; expected a finite angle");
+    if (!(std::isfinite(tolerance_rad) && tolerance_rad >= 0.0))
+      detail::fail("bayes_filter::heading_probability_within: tolerance ", tolerance_rad,
+                   " rad; expected a finite angle >= 0");
+    return masked_mass([&](Eigen::Index i) {
+      return std::abs(wrap_angle(origin_mm_(2) + offsets_mm_(2, i) - heading_rad)) <= tolerance_rad;
+    });
+  }
+
   [[nodiscard]] const Grid& grid() const { return grid_; }
   [[nodiscard]] const Motion& motion() const { return motion_; }
   [[nodiscard]] const Measurement& measurement_model() const { return measurement_; }
@@ -325,9 +452,55 @@ class bayes_filter {
           "still allows (posterior sum ", total,
           "); the measurement contradicts the prediction. "
           "The belief is unchanged; call reset() to start again from a uniform belief");
-    scratch_ *= static_cast<scalar_type>(1.0 / total);
+    normalise(scratch_, total);
     belief_.swap(scratch_);
-    return {std::log(total)};
+    return {.log_evidence = std::log(total), .log_likelihood_max = static_cast<double>(top)};
+  }
+
+  // b /= total (b's sum, > 0). When 1 / total overflows the belief's precision (a float sum
+  // below ~3e-39: a sharp touch far from where the prediction put its mass) the factor would
+  // be +infinity and 0 * infinity NaN; b is then divided by its largest value first (which
+  // becomes exactly 1) and by its new sum after.
+  static void normalise(belief_type& b, double total) {
+    const double inverse = 1.0 / total;
+    if (inverse < static_cast<double>(std::numeric_limits<scalar_type>::max())) {
+      b *= static_cast<scalar_type>(inverse);
+      return;
+    }
+    b /= b.maxCoeff();
+    b /= b.sum();
+  }
+
+  // Mass of the states whose position (the base grid's state for latent grids, in every
+  // hypothesis block) satisfies `inside(position index)`, accumulated in double.
+  template <class Inside>
+  double masked_mass(Inside inside) const {
+    const Eigen::Index n = offsets_mm_.cols();
+    double mass = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (!inside(i)) continue;
+      for (Eigen::Index b = i; b < belief_.size(); b += n) mass += static_cast<double>(belief_(b));
+    }
+    return std::min(mass, 1.0);
+  }
+
+  // The steps (column, row) of the plane's positions when every position of the first plane is
+  // origin + c * step_x + r * step_y (checked on every state); NaN otherwise.
+  Eigen::Vector2d lattice_step() const requires(Grid::dimension >= 2) {
+    const Eigen::Index rows = grid_.rows(), cols = grid_.cols();
+    const double sx = cols > 1 ? offsets_mm_(0, 1) : 1.0;
+    const double sy = rows > 1 ? offsets_mm_(1, cols) : 1.0;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    if (!(std::abs(sx) > 0.0 && std::abs(sy) > 0.0)) return {nan, nan};
+    const double tolerance = 1e-6 * (std::abs(sx) + std::abs(sy));
+    for (Eigen::Index r = 0; r < rows; ++r)
+      for (Eigen::Index c = 0; c < cols; ++c) {
+        const auto o = offsets_mm_.col(r * cols + c);
+        if (std::abs(o(0) - static_cast<double>(c) * sx) > tolerance ||
+            std::abs(o(1) - static_cast<double>(r) * sy) > tolerance)
+          return {nan, nan};
+      }
+    return {sx, sy};
   }
 
   // Positions the estimate describes: the base grid's states for latent grids, else all states.
@@ -346,6 +519,9 @@ class bayes_filter {
   belief_type log_likelihood_;
   typename estimate_type::vector_type origin_mm_;
   Eigen::Matrix<double, Grid::dimension, Eigen::Dynamic> offsets_mm_;
+  // See lattice_step(); NaN: not a lattice (or fewer than two coordinates).
+  Eigen::Vector2d lattice_step_ =
+      Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
 };
 
 }  // namespace tacmap

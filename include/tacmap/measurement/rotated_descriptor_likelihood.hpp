@@ -46,12 +46,10 @@ struct rotated_likelihood_params {
   pairing pairs = descriptor_likelihood_params{}.pairs;
   likelihood_shape shape = descriptor_likelihood_params{}.shape;
   double epsilon = descriptor_likelihood_params{}.epsilon;
-  /// Exponential shape's temperature. 0.25 (the planar model's too, since the appearance
-  /// hypotheses): measured best
-  /// with tacmap-evaluate at random orientations, 36 headings, classic_sift (ideal scenario:
-  /// 81 of 88 sequences localized with 0.25, 81 with 0.5, 78 with 1; realistic: 63 with 0.25,
-  /// 60 with 0.5 and with 0.125, 57 with 1; README "Unknown orientation").
-  double tau = 0.25;
+  /// Exponential shape's temperature: the planar model's calibrated 0.15 (README,
+  /// "Confidence"; the same descriptor distances). Before calibration 0.25 was the best
+  /// measured: gecko 81 of 88 sequences localized with 0.25, 81 with 0.5, 78 with 1.
+  double tau = 0.15;
   double tempering = descriptor_likelihood_params{}.tempering;
 
   void validate() const {

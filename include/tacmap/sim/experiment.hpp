@@ -41,6 +41,7 @@
 #include "tacmap/descriptor/dense_sift.hpp"
 #include "tacmap/descriptor/unsigned_orientation.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/filter/confidence.hpp"
 #include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/grid/pose_grid.hpp"
@@ -131,7 +132,7 @@ struct localization_config {
   likelihood_shape shape = likelihood_shape::exponential;  ///< descriptor models only
   window_features features = window_features::per_window;  ///< descriptor models only
   /// Temperature: exponential shape (descriptor distance units) or NCC (log p = ncc / tau).
-  /// Empty: the model's own default (descriptor 0.25, NCC 0.1).
+  /// Empty: the model's own default (descriptor 0.15, NCC 0.1).
   std::optional<double> tau;
   double tempering = 1.0;            ///< exponent on the likelihood
   double motion_sigma_mm = 1.0;      ///< odometry_gaussian sigma (Sec. III-B)
@@ -220,6 +221,7 @@ struct localization_config {
       t << *appearance_switch;
       out += "/switch=" + t.str();
     }
+
     return out;
   }
 };
@@ -232,7 +234,13 @@ struct touch_record {
   double true_y_mm = 0.0;
   double map_x_mm = 0.0;  ///< the belief's most probable state after this touch
   double map_y_mm = 0.0;
-  double error_mm = 0.0;        ///< distance between the two
+  double map_error_mm = 0.0;  ///< its distance to the truth
+  /// The estimate after this touch (`assess`): the centre of the 5 mm disc that holds the most
+  /// belief, the estimate most probably within 5 mm of the truth (the MAP position where the
+  /// grid is not a lattice).
+  double estimate_x_mm = 0.0;
+  double estimate_y_mm = 0.0;
+  double error_mm = 0.0;        ///< the estimate's distance to the truth
   double true_theta_rad = 0.0;  ///< the sensor's heading on the map (0 unless random)
   double map_theta_rad = 0.0;   ///< the MAP state's heading (pose grids; else 0 = known)
   double entropy_nats = 0.0;    ///< the belief's entropy after this touch (positions)
@@ -241,6 +249,16 @@ struct touch_record {
   std::vector<double> appearance_probability;
   bool accepted = true;  ///< false: preprocess rejected the frame, no update
   frame_rejection rejection = frame_rejection::none;
+  /// The belief's P(|position - MAP position| <= 5 mm) after this touch (`assess`): its claim
+  /// that the error is below the success radius. Calibrated when it matches how often it is.
+  double probability_within = 0.0;
+  /// Pose grids: the belief's P(|heading - MAP heading| <= 15 degrees); 1 for known headings.
+  double heading_probability = 1.0;
+  /// The verdict from those probabilities (`confidence_params` defaults).
+  tacmap::verdict verdict = tacmap::verdict::uncertain;
+  /// This touch's evidence log p(z_t | z_1..t-1) in the model's units
+  /// (`update_report::log_marginal_likelihood`); 0 for a rejected frame.
+  double log_marginal_likelihood = 0.0;
 };
 
 /// One sequence's run. The images are filled only when asked for (`keep_images`).
@@ -252,6 +270,10 @@ struct sequence_result {
   std::vector<touch_record> touches;
   std::vector<image<float>> tactile_images;  ///< preprocessed, map scale (empty when rejected)
   std::vector<image<float>> beliefs;         ///< position belief after each touch (all hypotheses)
+  /// The measurement model's log-likelihood over the filter's states for each touch (empty for
+  /// a rejected frame), filled only when asked for (`keep_log_likelihoods`): what a calibration
+  /// replays with other likelihood scales (sim/calibration.hpp).
+  std::vector<Eigen::Array<float, Eigen::Dynamic, 1>> log_likelihoods;
 };
 
 /// First touch (1-based) from which every error is below `threshold_mm`; empty when the last
@@ -491,8 +513,10 @@ class localization_experiment {
   [[nodiscard]] const image<float>& relief_mm() const { return first().relief; }
 
   /// Replays sequence `index` of the protocol. `keep_images`: also return every preprocessed
-  /// tactile image and belief image. Throws std::invalid_argument for an index out of range.
-  [[nodiscard]] sequence_result run(std::size_t index, bool keep_images = false) {
+  /// tactile image and belief image; `keep_log_likelihoods`: every touch's log-likelihood over
+  /// the states. Throws std::invalid_argument for an index out of range.
+  [[nodiscard]] sequence_result run(std::size_t index, bool keep_images = false,
+                                    bool keep_log_likelihoods = false) {
     if (index >= protocol_->sequences.size())
       detail::fail("localization_experiment::run: sequence ", index,
                    " does not exist; expected 0 .. ",
@@ -505,8 +529,9 @@ class localization_experiment {
       dark = polarity_rng.uniform() < 0.5;
     }
     polarity_setup& v = *variants_[dark ? 1 : 0];
-    sequence_result result = v.filter ? run_on(*v.filter, v, index, keep_images)
-                                      : run_on(*v.pose_filter, v, index, keep_images);
+    sequence_result result =
+        v.filter ? run_on(*v.filter, v, index, keep_images, keep_log_likelihoods)
+                 : run_on(*v.pose_filter, v, index, keep_images, keep_log_likelihoods);
     result.raised_dark = dark;
     return result;
   }
@@ -577,7 +602,7 @@ class localization_experiment {
 
   template <class Filter>
   sequence_result run_on(Filter& filter, const polarity_setup& v, std::size_t index,
-                         bool keep_images) {
+                         bool keep_images, bool keep_log_likelihoods) {
     constexpr bool pose = Filter::grid_type::dimension == 3;
     const touch_sequence& sequence = protocol_->sequences[index];
     // Each sequence gets its own noise stream, fixed by (seed, index): runs are reproducible
@@ -658,11 +683,32 @@ class localization_experiment {
       rec.true_y_mm = truth.y_mm;
       rec.accepted = pre.accepted();
       rec.rejection = pre.rejection;
-      if (rec.accepted) filter.update(pre.pixels);
+      if (rec.accepted) {
+        update_report report;
+        if (keep_log_likelihoods) {
+          // What update() does, with the log-likelihood kept.
+          belief_array<typename Filter::grid_type> ll(filter.grid().size());
+          filter.measurement_model().log_likelihood(filter.grid(), pre.pixels, ll);
+          report = filter.update_log_likelihood(ll);
+          result.log_likelihoods.push_back(std::move(ll));
+        } else {
+          report = filter.update(pre.pixels);
+        }
+        rec.log_marginal_likelihood = report.log_marginal_likelihood();
+      } else if (keep_log_likelihoods) {
+        result.log_likelihoods.emplace_back();
+      }
       const auto est = filter.estimate();
+      const confidence conf = assess(filter, est);
+      rec.probability_within = conf.probability_within;
+      rec.heading_probability = conf.heading_probability;
+      rec.verdict = conf.verdict;
+      rec.estimate_x_mm = conf.centre_mm(0);
+      rec.estimate_y_mm = conf.centre_mm(1);
+      rec.error_mm = std::hypot(rec.estimate_x_mm - truth.x_mm, rec.estimate_y_mm - truth.y_mm);
       rec.map_x_mm = est.map_mm(0);
       rec.map_y_mm = est.map_mm(1);
-      rec.error_mm = std::hypot(rec.map_x_mm - truth.x_mm, rec.map_y_mm - truth.y_mm);
+      rec.map_error_mm = std::hypot(rec.map_x_mm - truth.x_mm, rec.map_y_mm - truth.y_mm);
       rec.true_theta_rad = heading;
       if constexpr (pose) rec.map_theta_rad = est.map_mm(2);
       rec.entropy_nats = est.entropy_nats;

@@ -1,0 +1,177 @@
+// The belief's confidence in its estimate (filter/confidence.hpp, bayes_filter::
+// probability_within / most_probable_disc) and the normalisation that must not overflow.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "tacmap/tacmap.hpp"
+#include "test_support.hpp"
+
+using tacmap_test::message_of;
+
+namespace {
+
+template <class G>
+struct table_likelihood {
+  using measurement_type = tacmap::belief_array<G>;
+  void log_likelihood(const G&, const measurement_type& z, tacmap::belief_array<G>& out) const {
+    out = z;
+  }
+};
+
+using grid_t = tacmap::planar_grid<float>;
+using filter_t = tacmap::bayes_filter<grid_t, tacmap::odometry_gaussian, table_likelihood<grid_t>>;
+
+// 20 x 10 positions, 1 mm apart (map 22 x 12 px at 1 mm per px, window 3 x 3 px).
+filter_t lattice_filter() {
+  return filter_t(grid_t({.width = 22, .height = 12}, 1.0, {.width = 3, .height = 3}),
+                  tacmap::odometry_gaussian({.sigma_mm = 1.0, .k = 8}), {});
+}
+
+// The brute-force mass of the states within r of c.
+double mass_near(const filter_t& f, const Eigen::Vector2d& c, double r) {
+  double m = 0;
+  for (Eigen::Index i = 0; i < f.grid().size(); ++i)
+    if ((f.grid().state_mm(i).cast<double>() - c).norm() <= r)
+      m += static_cast<double>(f.belief()(i));
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("probability_within sums the belief over the disc, whatever the centre") {
+  auto f = lattice_filter();
+  tacmap::belief_array<grid_t> prior(f.grid().size());
+  for (Eigen::Index i = 0; i < prior.size(); ++i) prior(i) = static_cast<float>(1 + (i * 7) % 13);
+  f.set_prior(prior);
+  for (const Eigen::Vector2d& c :
+       {Eigen::Vector2d(5.0, 4.0), Eigen::Vector2d(12.3, 7.7), Eigen::Vector2d(-3.0, 2.0)})
+    for (const double r : {0.0, 1.0, 2.5, 5.0, 100.0})
+      CHECK(f.probability_within(c, r) == doctest::Approx(mass_near(f, c, r)).epsilon(1e-6));
+  CHECK(f.probability_within({10.0, 6.0}, 100.0) == doctest::Approx(1.0));
+  CHECK(message_of<std::invalid_argument>([&] {
+          (void)f.probability_within({1.0, 1.0}, -1.0);
+        }).find("radius -1 mm; expected a finite radius >= 0") != std::string::npos);
+  CHECK(message_of<std::invalid_argument>([&] {
+          (void)f.probability_within({std::numeric_limits<double>::quiet_NaN(), 1.0}, 5.0);
+        }).find("expected finite map coordinates") != std::string::npos);
+}
+
+TEST_CASE("most_probable_disc finds the disc holding the most mass, not the highest state") {
+  auto f = lattice_filter();
+  REQUIRE(f.positions_form_lattice());
+  // A sharp peak of 0.2 at one state, and 0.8 spread evenly over a 5 x 5 block elsewhere
+  // (0.032 each): the MAP state is the peak, the most probable 2 mm disc is the block's centre.
+  tacmap::belief_array<grid_t> prior = tacmap::belief_array<grid_t>::Zero(f.grid().size());
+  const Eigen::Index cols = f.grid().cols();
+  prior(1 * cols + 2) = 0.2F;
+  for (Eigen::Index r = 3; r < 8; ++r)
+    for (Eigen::Index c = 12; c < 17; ++c) prior(r * cols + c) = 0.8F / 25.0F;
+  f.set_prior(prior);
+  const auto e = f.estimate();
+  CHECK(e.map_index == 1 * cols + 2);
+  const auto [centre, mass] = f.most_probable_disc(2.0);
+  const Eigen::Vector2d block_centre = f.grid().state_mm(5 * cols + 14).cast<double>();
+  CHECK((centre - block_centre).norm() < 1e-6);
+  CHECK(mass == doctest::Approx(mass_near(f, block_centre, 2.0)).epsilon(1e-6));
+  CHECK(mass == doctest::Approx(13 * 0.8 / 25.0).epsilon(1e-5));  // 13 states within 2 mm
+  // Against brute force everywhere: no centre holds more.
+  for (Eigen::Index i = 0; i < f.grid().size(); ++i)
+    CHECK(mass_near(f, f.grid().state_mm(i).cast<double>(), 2.0) <= mass + 1e-6);
+  // A sharp peak: every 5 mm disc around it holds all of it; the centre is the peak itself.
+  tacmap::belief_array<grid_t> peak = tacmap::belief_array<grid_t>::Zero(f.grid().size());
+  peak(6 * cols + 9) = 1.0F;
+  f.set_prior(peak);
+  const auto [on_peak, all] = f.most_probable_disc(5.0);
+  CHECK((on_peak - f.grid().state_mm(6 * cols + 9).cast<double>()).norm() < 1e-9);
+  CHECK(all == doctest::Approx(1.0));
+  f.set_prior(prior);
+  // The verdict follows the mass against the threshold.
+  const auto sure = tacmap::assess(f, {.radius_mm = 2.0, .threshold = 0.4});
+  CHECK(sure.verdict == tacmap::verdict::localized);
+  CHECK((sure.centre_mm - block_centre).norm() < 1e-6);
+  CHECK(sure.probability_within == doctest::Approx(mass).epsilon(1e-9));
+  CHECK(tacmap::assess(f, {.radius_mm = 2.0, .threshold = 0.5}).verdict ==
+        tacmap::verdict::uncertain);
+  CHECK(message_of<std::invalid_argument>([&] {
+          (void)tacmap::assess(f, {.radius_mm = 2.0, .threshold = 1.5});
+        }).find("threshold = 1.5; expected a probability in (0, 1]") != std::string::npos);
+}
+
+TEST_CASE("a uniform belief is not localized; a concentrated one is") {
+  auto f = lattice_filter();
+  CHECK(tacmap::assess(f).verdict == tacmap::verdict::uncertain);
+  // 200 positions, 5 mm disc: at most 81 of them (the grid's 1 mm lattice) -> P <= 0.405.
+  CHECK(tacmap::assess(f).probability_within < 0.41);
+  tacmap::belief_array<grid_t> ll(f.grid().size());
+  for (Eigen::Index i = 0; i < ll.size(); ++i)
+    ll(i) = -static_cast<float>(
+        (f.grid().state_mm(i).cast<double>() - Eigen::Vector2d(8.5, 6.5)).squaredNorm());
+  f.update(ll);
+  const auto c = tacmap::assess(f);
+  CHECK(c.verdict == tacmap::verdict::localized);
+  CHECK((c.centre_mm - Eigen::Vector2d(8.5, 6.5)).norm() < 1e-6);  // a state's centre
+  CHECK(c.heading_probability == 1.0);
+}
+
+TEST_CASE("a touch whose evidence underflows float still gives a finite, normalised belief") {
+  // All prior mass on one state, which the touch rules out by e^-200 (0 in float), and a
+  // denormal prior elsewhere: the posterior's sum (~1e-43) has a reciprocal beyond float's
+  // range. It once came out NaN (0 * infinity).
+  auto f = lattice_filter();
+  tacmap::belief_array<grid_t> prior =
+      tacmap::belief_array<grid_t>::Constant(f.grid().size(), 1e-44F);
+  prior(0) = 1.0F;
+  f.set_prior(prior);
+  tacmap::belief_array<grid_t> ll = tacmap::belief_array<grid_t>::Zero(f.grid().size());
+  ll(0) = -200.0F;
+  const auto report = f.update(ll);
+  CHECK(f.belief().allFinite());
+  CHECK(static_cast<double>(f.belief().sum()) == doctest::Approx(1.0).epsilon(1e-5));
+  CHECK(f.belief()(0) == 0.0F);
+  CHECK(report.log_evidence < -90.0);
+  CHECK(report.log_marginal_likelihood() == doctest::Approx(report.log_evidence));
+}
+
+TEST_CASE("the evidence of a touch is absolute: a constant added to the model shows in it") {
+  auto a = lattice_filter();
+  auto b = lattice_filter();
+  tacmap::belief_array<grid_t> ll(a.grid().size());
+  for (Eigen::Index i = 0; i < ll.size(); ++i) ll(i) = -0.01F * static_cast<float>(i % 17);
+  const auto ra = a.update(ll);
+  const auto rb = b.update((ll - 3.0F).eval());
+  // Same posterior, same relative evidence, absolute evidence 3 lower.
+  CHECK(ra.log_evidence == doctest::Approx(rb.log_evidence));
+  CHECK(rb.log_marginal_likelihood() == doctest::Approx(ra.log_marginal_likelihood() - 3.0));
+  // log sum_x p(z|x) bel(x) with bel uniform over 200 states.
+  double direct = 0;
+  for (Eigen::Index i = 0; i < ll.size(); ++i) direct += std::exp(static_cast<double>(ll(i))) / 200;
+  CHECK(ra.log_marginal_likelihood() == doctest::Approx(std::log(direct)).epsilon(1e-5));
+}
+
+TEST_CASE("pose grids: the heading's probability and the position's disc over every heading") {
+  using pose_t = tacmap::pose_grid<float>;
+  using pose_filter =
+      tacmap::bayes_filter<pose_t, tacmap::pose_odometry_gaussian, table_likelihood<pose_t>>;
+  const pose_t grid(grid_t({.width = 22, .height = 12}, 1.0, {.width = 3, .height = 3}), 8);
+  pose_filter f(grid, tacmap::pose_odometry_gaussian({.sigma_mm = 1.0, .k = 8, .sigma_rad = 0.1}),
+                {});
+  REQUIRE(f.positions_form_lattice());
+  // Mass on one position at headings 0 (0.7) and 45 degrees (0.3).
+  tacmap::belief_array<pose_t> prior = tacmap::belief_array<pose_t>::Zero(grid.size());
+  const Eigen::Index plane = grid.rows() * grid.cols(), at = 4 * grid.cols() + 9;
+  prior(at) = 0.7F;
+  prior(plane + at) = 0.3F;
+  f.set_prior(prior);
+  const auto [centre, mass] = f.most_probable_disc(0.5);  // no neighbour within 0.5 mm
+  CHECK((centre - grid.state_mm(at).head<2>().cast<double>()).norm() < 1e-9);
+  CHECK(mass == doctest::Approx(1.0));
+  CHECK(f.heading_probability_within(0.0, 0.1) == doctest::Approx(0.7));
+  CHECK(f.heading_probability_within(0.0, 0.8) == doctest::Approx(1.0));
+  const auto c = tacmap::assess(f);
+  CHECK(c.heading_probability == doctest::Approx(0.7));  // 15 degrees around the MAP heading 0
+  CHECK(c.verdict == tacmap::verdict::uncertain);        // the heading is not sure enough
+}
