@@ -1,17 +1,24 @@
 #!/usr/bin/python3
 """Figures like the paper's Figs. 6-8 from a tacmap-evaluate CSV.
 
-  scripts/plot_evaluation.py evaluation.csv [--out FOLDER]
+  scripts/plot_evaluation.py evaluation.csv [more.csv ...] [--out FOLDER]
 
-Writes, per map in the CSV:
+Several CSVs (e.g. one per --seed) are pooled. Writes, per map in the CSVs:
   <map>_error_vs_touch.png      median error per touch with the 25-75 % band, one line per
                                 configuration (Fig. 6)
   <map>_final_error_hist.png    histogram of the final (last-touch) errors per configuration (Fig. 7)
   <map>_touches_to_localize.png histogram of touches to localize over the localized sequences (Fig. 8)
+and, over all maps, when the CSVs have the belief's claims (tacmap-evaluate since "Confidence"):
+  reliability.png               reliability diagram per configuration: the belief's claimed
+                                P(error <= 5 mm) against how often the error was <= 5 mm, in 10
+                                bins, with the expected calibration error (ECE) in the legend;
+                                beside it the same for the heading (pose grids: P(heading error
+                                <= 15 degrees)) and the appearance hypothesis, where present
 Needs python3-matplotlib (Debian; hence /usr/bin/python3, the interpreter it is installed for).
 """
 import argparse
 import csv
+import math
 import os
 import statistics
 import sys
@@ -33,11 +40,21 @@ def quantile(values, q):
     return values[lo] + (values[hi] - values[lo]) * (pos - lo)
 
 
-def load(path):
-    # runs[map][config][sequence] = list of rows in touch order; scenarios[map] = the simulation
-    # scenarios its rows were run in (CSV column "scenario"; older CSVs have none)
+def load(paths):
+    # runs[map][config][(file, sequence)] = list of rows in touch order; scenarios[map] = the
+    # simulation scenarios its rows were run in (CSV column "scenario"; older CSVs have none)
     runs = defaultdict(lambda: defaultdict(lambda: defaultdict(list)))
     scenarios = defaultdict(set)
+    for index, path in enumerate(paths):
+        load_one(path, index, runs, scenarios)
+    for configs in runs.values():
+        for seqs in configs.values():
+            for rows in seqs.values():
+                rows.sort(key=lambda r: int(r["touch"]))
+    return runs, scenarios
+
+
+def load_one(path, index, runs, scenarios):
     with open(path, newline="") as f:
         reader = csv.DictReader(f)
         needed = {"map", "config", "sequence", "touch", "error_mm", "localized", "touches_to_localize"}
@@ -46,14 +63,75 @@ def load(path):
             sys.exit(f"plot_evaluation: {path} lacks the columns {sorted(missing)}; "
                      "expected a CSV written by tacmap-evaluate")
         for row in reader:
-            runs[row["map"]][row["config"]][int(row["sequence"])].append(row)
+            runs[row["map"]][row["config"]][(index, int(row["sequence"]))].append(row)
             if row.get("scenario"):
                 scenarios[row["map"]].add(row["scenario"])
+
+
+def reliability(claims, bins=10):
+    """claims: (probability, outcome) pairs -> (per-bin (mean claim, frequency, count), ECE)."""
+    sums = [[0.0, 0.0, 0] for _ in range(bins)]
+    for p, ok in claims:
+        p = min(max(p, 0.0), 1.0)
+        b = min(bins - 1, int(p * bins))
+        sums[b][0] += p
+        sums[b][1] += 1.0 if ok else 0.0
+        sums[b][2] += 1
+    points = [(sp / n, so / n, n) for sp, so, n in sums if n]
+    ece = sum(abs(mp - fr) * n for mp, fr, n in points) / max(1, len(claims))
+    return points, ece
+
+
+def plot_reliability(runs, out):
+    """Reliability diagrams over every map, one line per configuration; None without claims."""
+    kinds = {"position": "P(error <= 5 mm)", "heading": "P(heading error <= 15 deg)",
+             "appearance": "P(appearance hypothesis)"}
+    claims = {k: defaultdict(list) for k in kinds}
     for configs in runs.values():
-        for seqs in configs.values():
+        for config, seqs in configs.items():
             for rows in seqs.values():
-                rows.sort(key=lambda r: int(r["touch"]))
-    return runs, scenarios
+                for r in rows:
+                    if not r.get("p_within_5mm"):
+                        return None  # an older CSV
+                    claims["position"][config].append(
+                        (float(r["p_within_5mm"]), float(r["error_mm"]) <= 5.0))
+                    if int(r.get("headings") or 0) > 0 and r.get("p_heading"):
+                        d = abs(float(r["map_theta_rad"]) - float(r["true_theta_rad"]))
+                        d = min(d, 2 * math.pi - d)
+                        claims["heading"][config].append(
+                            (float(r["p_heading"]), d <= math.radians(15.0)))
+                    if r.get("p_inverted"):
+                        p_dark = float(r["p_inverted"])
+                        said_dark = p_dark > 0.5
+                        claims["appearance"][config].append(
+                            (p_dark if said_dark else 1.0 - p_dark,
+                             said_dark == (r.get("raised_dark") == "1")))
+    panels = [k for k in kinds if claims[k]]
+    fig, axes = plt.subplots(1, len(panels), figsize=(6.5 * len(panels), 6.5), squeeze=False)
+    colours = plt.get_cmap("tab20")
+    configs = sorted(claims["position"])
+    for ax, kind in zip(axes[0], panels):
+        ax.plot([0, 1], [0, 1], color="k", linewidth=1, linestyle="--", label="calibrated")
+        for i, config in enumerate(configs):
+            if not claims[kind].get(config):
+                continue
+            points, ece = reliability(claims[kind][config])
+            ax.plot([p[0] for p in points], [p[1] for p in points], marker="o",
+                    color=colours(i % 20),
+                    label=f"{config}: ECE {100 * ece:.1f} pts ({len(claims[kind][config])})")
+        ax.set_xlim(0, 1)
+        ax.set_ylim(0, 1)
+        ax.set_aspect("equal")
+        ax.set_xlabel(f"the belief's claim, {kinds[kind]} (bin mean)")
+        ax.set_ylabel("observed frequency")
+        ax.set_title(f"reliability: {kind}")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="upper left")
+    path = os.path.join(out, "reliability.png")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
 
 
 def plot_map(name, configs, out, label=None):
@@ -81,7 +159,7 @@ def plot_map(name, configs, out, label=None):
             ax.fill_between(xs, q1, q3, color=line.get_color(), alpha=0.15)
     ax.axhline(5.0, color="k", linestyle="--", linewidth=1, label="5 mm (localized)")
     ax.set_xlabel("touch")
-    ax.set_ylabel("error of the MAP estimate (mm)")
+    ax.set_ylabel("error of the estimate (mm)")
     ax.set_title(f"{title}: error per touch (median" + (", 25-75 % band)" if bands else ")"))
     ax.set_yscale("symlog", linthresh=5.0)
     ax.set_ylim(bottom=0.0)
@@ -136,16 +214,17 @@ def plot_map(name, configs, out, label=None):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("csv", help="CSV written by tacmap-evaluate")
+    parser.add_argument("csv", nargs="+", help="CSV(s) written by tacmap-evaluate (pooled)")
     parser.add_argument("--out", default="evaluation-plots", help="output folder")
     parser.add_argument("--config", action="append", default=[],
                         help="plot only configurations containing this text (repeatable)")
     args = parser.parse_args()
-    if not os.path.isfile(args.csv):
-        sys.exit(f"plot_evaluation: '{args.csv}' does not exist; expected tacmap-evaluate's CSV")
+    for path in args.csv:
+        if not os.path.isfile(path):
+            sys.exit(f"plot_evaluation: '{path}' does not exist; expected tacmap-evaluate's CSV")
     runs, scenarios = load(args.csv)
     if not runs:
-        sys.exit(f"plot_evaluation: '{args.csv}' has no data rows")
+        sys.exit(f"plot_evaluation: {args.csv} have no data rows")
     os.makedirs(args.out, exist_ok=True)
     for name, configs in sorted(runs.items()):
         if args.config:
@@ -155,6 +234,12 @@ def main():
         label = f"{name} ({', '.join(sorted(scenarios[name]))} scenario)" if scenarios[name] else name
         for path in plot_map(name, configs, args.out, label):
             print(os.path.abspath(path))
+    if args.config:
+        runs = {m: {c: v for c, v in configs.items() if any(f in c for f in args.config)}
+                for m, configs in runs.items()}
+    path = plot_reliability(runs, args.out)
+    if path:
+        print(os.path.abspath(path))
 
 
 if __name__ == "__main__":

@@ -8,28 +8,15 @@
 #include <string>
 
 #include "tacmap/tacmap.hpp"
+#include "table_filter.hpp"
 #include "test_support.hpp"
 
 using tacmap_test::message_of;
+using filter_t = tacmap_test::table_filter;
+using grid_t = tacmap_test::table_grid;
+using tacmap_test::table_likelihood;
 
 namespace {
-
-template <class G>
-struct table_likelihood {
-  using measurement_type = tacmap::belief_array<G>;
-  void log_likelihood(const G&, const measurement_type& z, tacmap::belief_array<G>& out) const {
-    out = z;
-  }
-};
-
-using grid_t = tacmap::planar_grid<float>;
-using filter_t = tacmap::bayes_filter<grid_t, tacmap::odometry_gaussian, table_likelihood<grid_t>>;
-
-// 20 x 10 positions, 1 mm apart (map 22 x 12 px at 1 mm per px, window 3 x 3 px).
-filter_t lattice_filter() {
-  return filter_t(grid_t({.width = 22, .height = 12}, 1.0, {.width = 3, .height = 3}),
-                  tacmap::odometry_gaussian({.sigma_mm = 1.0, .k = 8}), {});
-}
 
 // The brute-force mass of the states within r of c.
 double mass_near(const filter_t& f, const Eigen::Vector2d& c, double r) {
@@ -43,7 +30,7 @@ double mass_near(const filter_t& f, const Eigen::Vector2d& c, double r) {
 }  // namespace
 
 TEST_CASE("probability_within sums the belief over the disc, whatever the centre") {
-  auto f = lattice_filter();
+  auto f = tacmap_test::lattice_filter();
   tacmap::belief_array<grid_t> prior(f.grid().size());
   for (Eigen::Index i = 0; i < prior.size(); ++i) prior(i) = static_cast<float>(1 + (i * 7) % 13);
   f.set_prior(prior);
@@ -61,7 +48,7 @@ TEST_CASE("probability_within sums the belief over the disc, whatever the centre
 }
 
 TEST_CASE("most_probable_disc finds the disc holding the most mass, not the highest state") {
-  auto f = lattice_filter();
+  auto f = tacmap_test::lattice_filter();
   REQUIRE(f.positions_form_lattice());
   // A sharp peak of 0.2 at one state, and 0.8 spread evenly over a 5 x 5 block elsewhere
   // (0.032 each): the MAP state is the peak, the most probable 2 mm disc is the block's centre.
@@ -102,7 +89,7 @@ TEST_CASE("most_probable_disc finds the disc holding the most mass, not the high
 }
 
 TEST_CASE("a uniform belief is not localized; a concentrated one is") {
-  auto f = lattice_filter();
+  auto f = tacmap_test::lattice_filter();
   CHECK(tacmap::assess(f).verdict == tacmap::verdict::uncertain);
   // 200 positions, 5 mm disc: at most 81 of them (the grid's 1 mm lattice) -> P <= 0.405.
   CHECK(tacmap::assess(f).probability_within < 0.41);
@@ -121,7 +108,7 @@ TEST_CASE("a touch whose evidence underflows float still gives a finite, normali
   // All prior mass on one state, which the touch rules out by e^-200 (0 in float), and a
   // denormal prior elsewhere: the posterior's sum (~1e-43) has a reciprocal beyond float's
   // range. It once came out NaN (0 * infinity).
-  auto f = lattice_filter();
+  auto f = tacmap_test::lattice_filter();
   tacmap::belief_array<grid_t> prior =
       tacmap::belief_array<grid_t>::Constant(f.grid().size(), 1e-44F);
   prior(0) = 1.0F;
@@ -137,8 +124,8 @@ TEST_CASE("a touch whose evidence underflows float still gives a finite, normali
 }
 
 TEST_CASE("the evidence of a touch is absolute: a constant added to the model shows in it") {
-  auto a = lattice_filter();
-  auto b = lattice_filter();
+  auto a = tacmap_test::lattice_filter();
+  auto b = tacmap_test::lattice_filter();
   tacmap::belief_array<grid_t> ll(a.grid().size());
   for (Eigen::Index i = 0; i < ll.size(); ++i) ll(i) = -0.01F * static_cast<float>(i % 17);
   const auto ra = a.update(ll);

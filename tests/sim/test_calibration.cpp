@@ -12,27 +12,13 @@
 #include "tacmap/sim/calibration.hpp"
 #include "tacmap/sim/experiment.hpp"
 #include "tacmap/sim/protocol.hpp"
+#include "table_filter.hpp"
 #include "test_support.hpp"
 
 using tacmap_test::message_of;
+using filter_t = tacmap_test::table_filter;
 
 namespace {
-
-template <class G>
-struct table_likelihood {
-  using measurement_type = tacmap::belief_array<G>;
-  void log_likelihood(const G&, const measurement_type& z, tacmap::belief_array<G>& out) const {
-    out = z;
-  }
-};
-
-using grid_t = tacmap::planar_grid<float>;
-using filter_t = tacmap::bayes_filter<grid_t, tacmap::odometry_gaussian, table_likelihood<grid_t>>;
-
-filter_t small_filter() {
-  return filter_t(grid_t({.width = 22, .height = 12}, 1.0, {.width = 3, .height = 3}),
-                  tacmap::odometry_gaussian({.sigma_mm = 1.0, .k = 8}), {});
-}
 
 // `count` one-touch sequences drawn from the model itself: random distances d(x) per touch, the
 // truth drawn from p(x) ∝ exp(-d(x) / true_tau), log-likelihoods recorded at `reference_tau`.
@@ -94,7 +80,7 @@ TEST_CASE("reliability: bins, expected calibration error and Brier score by hand
 }
 
 TEST_CASE("the fitted temperature is the one the data were drawn with") {
-  const filter_t f = small_filter();
+  const filter_t f = tacmap_test::lattice_filter();
   for (const double true_tau : {0.1, 0.3}) {
     tacmap::likelihood_calibration<filter_t> cal(0.25);
     add_model_data(cal, f, true_tau, 0.25, 600, 7U);
@@ -114,7 +100,7 @@ TEST_CASE("the fitted temperature is the one the data were drawn with") {
 }
 
 TEST_CASE("calibration data that cannot pin a temperature down is refused, with reasons") {
-  const filter_t f = small_filter();
+  const filter_t f = tacmap_test::lattice_filter();
   tacmap::likelihood_calibration<filter_t> few(0.25);
   add_model_data(few, f, 0.2, 0.25, 5, 1U);
   CHECK(message_of([&] {
@@ -162,7 +148,7 @@ TEST_CASE("calibration data that cannot pin a temperature down is refused, with 
 }
 
 TEST_CASE("a temperature the data push to the end of the range is reported, not used") {
-  const filter_t f = small_filter();
+  const filter_t f = tacmap_test::lattice_filter();
   tacmap::likelihood_calibration<filter_t> cal(0.25);
   add_model_data(cal, f, 0.05, 0.25, 200, 3U);
   tacmap::tau_fit_params params;
