@@ -7,8 +7,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "tacmap/tacmap.hpp"
 #include "table_filter.hpp"
+#include "tacmap/tacmap.hpp"
 #include "test_support.hpp"
 
 using tacmap_test::message_of;

@@ -213,11 +213,12 @@ TEST_CASE("rotated likelihood: distances equal eq. (1) computed from the definit
       CHECK(o.row == std::lround(12.0 + s * cx + c * cy));
       CHECK(o.col == std::lround(c * cx - s * cy));
     }
-    // The default likelihood: exponential, log p = -d / tau (tau = 0.25), finite everywhere.
-    REQUIRE(model.params().tau == 0.25);
+    // The default likelihood: exponential, log p = -d / tau (tau = 0.15, calibrated), finite
+    // everywhere.
+    REQUIRE(model.params().tau == 0.15);
     const Eigen::ArrayXf lq = ll.segment(q * g.layer_size(), g.layer_size());
     CHECK(lq.isFinite().all());
-    CHECK(((lq + got / 0.25F).abs() < 1e-5F * (1.0F + got.abs())).all());
+    CHECK(((lq + got / 0.15F).abs() < 1e-5F * (1.0F + got.abs())).all());
   }
   // +90 deg: the patches reach 12 px right (patch 0) and 6 px left (patch 2) of the centre, so
   // windows at cols < 6 or > 34 have a patch off the map: still finite (that patch counts its

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "table_filter.hpp"
 #include "tacmap/sim/calibration.hpp"
 #include "tacmap/sim/experiment.hpp"
 #include "tacmap/sim/protocol.hpp"
-#include "table_filter.hpp"
 #include "test_support.hpp"
 
 using tacmap_test::message_of;
