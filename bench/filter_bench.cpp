@@ -62,6 +62,35 @@ void update_given_likelihood(benchmark::State& state) {
 }
 BENCHMARK(update_given_likelihood);
 
+// The paper's motion with a floor under every state (robust_motion, lost probability 0.001,
+// the experiment's default): one more pass over the belief.
+void predict_robust(benchmark::State& state) {
+  using robust_t = tacmap::bayes_filter<grid_t, tacmap::robust_motion<tacmap::odometry_gaussian>,
+                                        given_likelihood>;
+  robust_t f(grid_t::paper(),
+             tacmap::robust_motion<tacmap::odometry_gaussian>(
+                 tacmap::odometry_gaussian({.sigma_mm = 1.5, .k = 8}), {.lost_probability = 0.001}),
+             given_likelihood{});
+  f.update_log_likelihood(random_log_likelihood(f.grid().size()));
+  const tacmap::odometry moves[2] = {{2.3, -1.7}, {-2.3, 1.7}};
+  int i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(f.predict(moves[i]));
+    i ^= 1;
+  }
+  state.SetItemsProcessed(state.iterations() * f.grid().size());
+}
+BENCHMARK(predict_robust);
+
+// The confidence of the estimate (filter/confidence.hpp): the most probable 5 mm disc and its
+// mass, after every touch.
+void assess_paper(benchmark::State& state) {
+  auto f = paper_filter();
+  f.update_log_likelihood(random_log_likelihood(f.grid().size()));
+  for (auto _ : state) benchmark::DoNotOptimize(tacmap::assess(f));
+}
+BENCHMARK(assess_paper);
+
 void estimate_paper(benchmark::State& state) {
   auto f = paper_filter();
   f.update_log_likelihood(random_log_likelihood(f.grid().size()));

@@ -256,6 +256,34 @@ int main(int argc, char** argv) try {
                  "(comma-separated to compare; default 0.05)")
       ->delimiter(',')
       ->check(CLI::Range(0.0, 0.5));
+  // Exploration faults (sim/faults.hpp).
+  tacmap::exploration_faults faults;
+  std::size_t photo_touches = 7;
+  double odometry_noise = -1.0;
+  app.add_option("--outliers", faults.outlier_probability,
+                 "fault: probability that a move's odometry is off by --outlier-size")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--outlier-size", faults.outlier_mm, "fault: an odometry outlier's error, mm (8)")
+      ->check(CLI::Range(0.0, 100.0));
+  app.add_option("--odometry-noise", odometry_noise,
+                 "fault: the true odometry noise per axis, mm (default: the protocol's 0.5)")
+      ->check(CLI::Range(0.0, 50.0));
+  app.add_option("--slip-touch", faults.slip_touch,
+                 "fault: the object slips by --slip mm before this touch (1-based; 0 = none)");
+  app.add_option("--slip", faults.slip_mm, "fault: how far the object slips, mm (20)")
+      ->check(CLI::Range(0.001, 100.0));
+  app.add_option("--kidnap-touch", faults.kidnap_touch,
+                 "fault: the sensor is put down elsewhere at this touch, odometry as usual "
+                 "(1-based; 0 = none)");
+  std::vector<double> lost_probabilities;  // empty: the configuration's default
+  app.add_option("--lost-probability", lost_probabilities,
+                 "probability that a move lands the sensor anywhere (robust_motion; "
+                 "comma-separated to compare; default: the configuration's)")
+      ->delimiter(',')
+      ->check(CLI::Range(0.0, 0.999));
+  app.add_option("--touches", photo_touches,
+                 "touches per sequence of the photographs' protocols (7; the gecko's are fixed)")
+      ->check(CLI::Range(1, 200));
   app.add_option("--sequences", sequences, "run only the first N sequences of each map (0 = all)");
   app.add_option("--seed", seed, "seeds the simulator and the photographs' protocols");
   app.add_option("--tau", taus,
@@ -299,6 +327,12 @@ int main(int argc, char** argv) try {
                                                   " is not a number of sequences; expected N >= 0 "
                                                   "(the first N of each map; 0 = all)");
   max_sequences = static_cast<std::size_t>(sequences);
+  if (odometry_noise >= 0.0) faults.odometry_sigma_mm = odometry_noise;
+  try {
+    faults.validate();
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("faults", e.what());
+  }
   const auto scenario =
       parse_choice<tacmap::scenario_kind>("--scenario", scenario_name,
                                           {{"ideal", tacmap::scenario_kind::ideal},
@@ -368,6 +402,7 @@ int main(int argc, char** argv) try {
     base.simulator_seed = seed;
     base.simulator = sim;
     base.scenario = effects;
+    base.faults = faults;
     if (kind == tacmap::measurement_kind::ncc) {
       for (const auto& t : tau_values) {
         auto c = base;
@@ -403,6 +438,17 @@ int main(int argc, char** argv) try {
             }
             configs.push_back(c);
           }
+  }
+
+  // One copy of every configuration per --lost-probability value.
+  if (!lost_probabilities.empty()) {
+    std::vector<tacmap::localization_config> expanded;
+    for (const double l : lost_probabilities)
+      for (auto c : configs) {
+        c.lost_probability = l;
+        expanded.push_back(c);
+      }
+    configs = std::move(expanded);
   }
 
   // One copy of every configuration per --headings value (NCC only with known orientation).
@@ -477,7 +523,7 @@ int main(int argc, char** argv) try {
   for (std::size_t i = 0; i < photos.size(); ++i) {
     std::uint64_t s = seed + 0x9E3779B97F4A7C15ULL * (i + 1);
     maps.push_back({std::filesystem::path(photos[i]).stem().string(),
-                    photo_protocol(photos[i], tacmap::splitmix64(s))});
+                    photo_protocol(photos[i], tacmap::splitmix64(s), photo_touches)});
   }
   if (maps.empty()) throw CLI::ValidationError("maps", "no map: drop --no-gecko or give --photo");
 
@@ -501,8 +547,10 @@ int main(int argc, char** argv) try {
   std::fprintf(stderr, "scenario: %s\n", to_string(scenario));
   std::printf(
       "| map | configuration | localized | median touches to localize | median final error mm | "
-      "median final entropy nats | raised dark: localized | median final P(true appearance) |\n");
-  std::printf("|---|---|---|---|---|---|---|---|\n");
+      "median final entropy nats | raised dark: localized | median final P(true appearance) | "
+      "back below 5 mm within 3 touches of the slip / kidnap |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|\n");
+  const std::size_t fault_touch = std::max(faults.slip_touch, faults.kidnap_touch);
   for (const auto& m : maps) {
     const std::size_t n = max_sequences == 0 ? m.protocol.sequences.size()
                                              : std::min(m.protocol.sequences.size(), max_sequences);
@@ -511,7 +559,7 @@ int main(int argc, char** argv) try {
       tacmap::localization_experiment experiment(m.protocol, config);  // once per map x config
       std::size_t successes = 0;
       std::vector<double> ttl, final_errors, final_entropies, right_appearance;
-      std::size_t dark_sequences = 0, dark_successes = 0;
+      std::size_t dark_sequences = 0, dark_successes = 0, recoveries = 0;
       for (std::size_t q = 0; q < n; ++q) {
         const auto run = experiment.run(q);
         const bool ok = tacmap::localized(run.touches);
@@ -520,6 +568,7 @@ int main(int argc, char** argv) try {
         if (ok) ttl.push_back(static_cast<double>(*t));
         final_errors.push_back(run.touches.back().error_mm);
         final_entropies.push_back(run.touches.back().entropy_nats);
+        if (fault_touch > 0 && tacmap::recovered(run.touches, fault_touch, 3)) ++recoveries;
         if (run.raised_dark) {
           ++dark_sequences;
           dark_successes += ok ? 1U : 0U;
@@ -563,9 +612,12 @@ int main(int argc, char** argv) try {
       if (!right_appearance.empty())
         std::snprintf(appearance_text, sizeof appearance_text, "%.3f",
                       tacmap::median(right_appearance));
-      std::printf("| %s | %s | %zu / %zu | %s | %.2f | %.2f | %zu / %zu | %s |\n", m.name.c_str(),
-                  config.name().c_str(), successes, n, ttl_text, tacmap::median(final_errors),
-                  tacmap::median(final_entropies), dark_successes, dark_sequences, appearance_text);
+      const std::string recovery_text =
+          fault_touch > 0 ? std::to_string(recoveries) + " / " + std::to_string(n) : "-";
+      std::printf("| %s | %s | %zu / %zu | %s | %.2f | %.2f | %zu / %zu | %s | %s |\n",
+                  m.name.c_str(), config.name().c_str(), successes, n, ttl_text,
+                  tacmap::median(final_errors), tacmap::median(final_entropies), dark_successes,
+                  dark_sequences, appearance_text, recovery_text.c_str());
       std::fflush(stdout);
       if (n > 0 && static_cast<double>(successes) < min_success * static_cast<double>(n))
         below_floor = true;

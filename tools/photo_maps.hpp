@@ -96,9 +96,11 @@ inline image<float> resize_area(const image<float>& src, Eigen::Index rows, Eige
   return out;
 }
 
-// A photograph's protocol: 7 touch locations on pixel-aligned states, 22 random orders, measured
-// odometry = true motion + N(0, 0.5 mm) per axis (the gecko protocol's noise), from `seed`.
-inline tacmap::touch_protocol photo_protocol(const std::string& path, std::uint64_t seed) {
+// A photograph's protocol: `touches` touch locations on pixel-aligned states, 22 random orders,
+// measured odometry = true motion + N(0, 0.5 mm) per axis (the gecko protocol's noise), from
+// `seed`.
+inline tacmap::touch_protocol photo_protocol(const std::string& path, std::uint64_t seed,
+                                             std::size_t touches = 7) {
   tacmap::touch_protocol p;
   p.map_file = path;
   p.map = resize_area(load_photo(path), 120, 120);
@@ -112,7 +114,7 @@ inline tacmap::touch_protocol photo_protocol(const std::string& path, std::uint6
   const tacmap::planar_grid<float> grid(p.map_size(), p.mm_per_px,
                                         tacmap::tactile_window({}, p.mm_per_px));
   tacmap::sim_rng rng(seed);
-  while (p.locations.size() < 7) {  // 7 distinct states
+  while (p.locations.size() < touches) {  // distinct states
     const auto s = grid.state_mm(
         static_cast<Eigen::Index>(rng.below(static_cast<std::uint64_t>(grid.size()))));
     const tacmap::touch_location loc{s(0), s(1)};

@@ -21,5 +21,6 @@
 #include "tacmap/motion/latent_motion.hpp"
 #include "tacmap/motion/odometry_gaussian.hpp"
 #include "tacmap/motion/pose_odometry_gaussian.hpp"
+#include "tacmap/motion/robust_motion.hpp"
 #include "tacmap/tactile/frame.hpp"
 #include "tacmap/tactile/preprocess.hpp"

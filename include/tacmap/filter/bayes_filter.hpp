@@ -294,15 +294,14 @@ class bayes_filter {
       detail::fail<std::logic_error>(
           "bayes_filter::most_probable_disc: the grid's positions are not an axis-aligned regular "
           "lattice (as planar_grid's and pose_grid's are); use probability_within instead");
-    // Position marginal, then per-row prefix sums: the disc is a stack of row runs.
+    // Position marginal (the planes summed), then per-row prefix sums: the disc is a stack of
+    // row runs, each a difference of two prefix sums. The prefix rows are padded by the widest
+    // run on both sides (clamped values), so every run of a row is one shifted vector
+    // difference over the whole row.
     image<double> p = image<double>::Zero(rows, cols);
-    for (Eigen::Index i = 0; i < belief_.size(); ++i) {
-      const Eigen::Index k = i % plane;
-      p(k / cols, k % cols) += static_cast<double>(belief_(i));
-    }
-    image<double> prefix(rows, cols + 1);
-    prefix.col(0).setZero();
-    for (Eigen::Index c = 0; c < cols; ++c) prefix.col(c + 1) = prefix.col(c) + p.col(c);
+    Eigen::Map<Eigen::ArrayXd> p_flat(p.data(), plane);
+    for (Eigen::Index at = 0; at < belief_.size(); at += plane)
+      p_flat += Eigen::Map<const belief_type>(belief_.data() + at, plane).template cast<double>();
     const double sx = std::abs(lattice_step_(0)), sy = std::abs(lattice_step_(1));
     const auto reach_r = static_cast<Eigen::Index>(std::floor(radius_mm / sy + 1e-9));
     std::vector<Eigen::Index> half(static_cast<std::size_t>(reach_r + 1));
@@ -311,24 +310,26 @@ class bayes_filter {
       half[static_cast<std::size_t>(dr)] = static_cast<Eigen::Index>(
           std::floor(std::sqrt(std::max(0.0, radius_mm * radius_mm - dy * dy)) / sx + 1e-9));
     }
-    double best = -1.0;
-    Eigen::Index best_r = 0, best_c = 0;
+    const Eigen::Index pad = half[0];
+    image<double> prefix(rows, cols + 1 + 2 * pad);  // prefix(r, pad + j) = sum of p(r, 0..j-1)
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      double run = 0.0;
+      for (Eigen::Index j = 0; j <= pad; ++j) prefix(r, j) = 0.0;
+      for (Eigen::Index c = 0; c < cols; ++c) prefix(r, pad + c + 1) = run += p(r, c);
+      for (Eigen::Index j = pad + cols + 1; j < prefix.cols(); ++j) prefix(r, j) = run;
+    }
+    image<double> disc = image<double>::Zero(rows, cols);
     for (Eigen::Index r = 0; r < rows; ++r)
-      for (Eigen::Index c = 0; c < cols; ++c) {
-        double mass = 0.0;
-        for (Eigen::Index dr = -reach_r; dr <= reach_r; ++dr) {
-          const Eigen::Index rr = r + dr;
-          if (rr < 0 || rr >= rows) continue;
-          const Eigen::Index h = half[static_cast<std::size_t>(dr < 0 ? -dr : dr)];
-          mass +=
-              prefix(rr, std::min(cols, c + h + 1)) - prefix(rr, std::max<Eigen::Index>(0, c - h));
-        }
-        if (mass > best) {
-          best = mass;
-          best_r = r;
-          best_c = c;
-        }
+      for (Eigen::Index dr = -reach_r; dr <= reach_r; ++dr) {
+        const Eigen::Index rr = r + dr;
+        if (rr < 0 || rr >= rows) continue;
+        const Eigen::Index h = half[static_cast<std::size_t>(dr < 0 ? -dr : dr)];
+        // Row rr's run c - h .. c + h for every c at once.
+        disc.row(r) +=
+            prefix.row(rr).segment(pad + h + 1, cols) - prefix.row(rr).segment(pad - h, cols);
       }
+    Eigen::Index best_r = 0, best_c = 0;
+    disc.maxCoeff(&best_r, &best_c);
     // Discs around a sharp peak all hold (nearly) the same mass, and the scan keeps the first:
     // the centre is the mean of the belief inside the best disc instead, which sits on the
     // peak (or the middle of a plateau), and the probability is that of its own disc.

@@ -53,6 +53,8 @@
 #include "tacmap/motion/latent_motion.hpp"
 #include "tacmap/motion/odometry_gaussian.hpp"
 #include "tacmap/motion/pose_odometry_gaussian.hpp"
+#include "tacmap/motion/robust_motion.hpp"
+#include "tacmap/sim/faults.hpp"
 #include "tacmap/sim/protocol.hpp"
 #include "tacmap/sim/random.hpp"
 #include "tacmap/sim/scenario.hpp"
@@ -141,6 +143,9 @@ struct localization_config {
   simulator_params simulator{};  ///< the simulator's physics (its seed is replaced per sequence)
   /// Camera map, registration and per-press effects (sim/scenario.hpp); ideal by default.
   scenario_params scenario{};
+  /// Faults during exploration: odometry outliers and noise, a slip, a kidnap (sim/faults.hpp);
+  /// none by default.
+  exploration_faults faults{};
   preprocess_params preprocessing{};  ///< thresholds; mm_per_px is replaced by the map's
   /// Unknown orientation (issue 6): 0 localizes over (x, y) with the heading known (the paper);
   /// N >= 1 localizes over (x, y, theta) with a `pose_grid` of N headings, the
@@ -160,6 +165,15 @@ struct localization_config {
   /// 0.05: measured equal to 0 on objects of one relation and better on objects whose parts
   /// differ (README, "The photo is not the touch"); 0.2 lost on the former.
   static constexpr double default_appearance_switch = 0.05;
+  /// The probability that a move lands the sensor anywhere (`robust_motion`): the floor that
+  /// lets the filter recover from odometry outliers, slips and kidnaps. Empty:
+  /// `default_lost_probability`; 0: the paper's motion model.
+  std::optional<double> lost_probability;
+  /// 0.001: measured equal to 0 without faults (realistic, seeds 1-3: 578 of 594 both) and
+  /// better with every fault (README, "When exploration goes wrong"); 0.01 recovers more after
+  /// slips and kidnaps but loses 4 sequences without faults.
+  static constexpr double default_lost_probability = 0.001;
+  [[nodiscard]] double lost() const { return lost_probability.value_or(default_lost_probability); }
 
   /// The switch probability the filter uses (0 unless the appearance is latent).
   [[nodiscard]] double switch_probability() const {
@@ -169,6 +183,8 @@ struct localization_config {
 
   /// Throws std::invalid_argument for settings that contradict each other, naming both.
   void validate() const {
+    faults.validate();
+    if (lost_probability) robust_motion_params{.lost_probability = *lost_probability}.validate();
     if (appearance_switch && appearance != appearance_handling::latent)
       detail::fail("localization_config: appearance_switch = ", *appearance_switch,
                    " needs appearance = latent (it switches between appearance hypotheses), but "
@@ -221,6 +237,11 @@ struct localization_config {
       t << *appearance_switch;
       out += "/switch=" + t.str();
     }
+    if (lost_probability) {
+      std::ostringstream t;
+      t << *lost_probability;
+      out += "/lost=" + t.str();
+    }
 
     return out;
   }
@@ -247,6 +268,10 @@ struct touch_record {
   /// Posterior of each appearance hypothesis after this touch (`localization_config::
   /// appearances()` order; one value 1 for `fixed`).
   std::vector<double> appearance_probability;
+  bool odometry_outlier = false;  ///< the move before this touch was an injected outlier
+  /// The motion before this touch carried the whole belief off the map (the filter refused it)
+  /// and the run restarted from a uniform belief.
+  bool lost_track = false;
   bool accepted = true;  ///< false: preprocess rejected the frame, no update
   frame_rejection rejection = frame_rejection::none;
   /// The belief's P(|position - MAP position| <= 5 mm) after this touch (`assess`): its claim
@@ -466,11 +491,11 @@ class configured_rotated_measurement {
 class localization_experiment {
  public:
   using filter_type =
-      bayes_filter<latent_grid<planar_grid<float>>, latent_motion<odometry_gaussian>,
+      bayes_filter<latent_grid<planar_grid<float>>, robust_motion<latent_motion<odometry_gaussian>>,
                    appearance_likelihood<configured_measurement>>;
-  using pose_filter_type =
-      bayes_filter<latent_grid<pose_grid<float>>, latent_motion<pose_odometry_gaussian>,
-                   appearance_likelihood<configured_rotated_measurement>>;
+  using pose_filter_type = bayes_filter<latent_grid<pose_grid<float>>,
+                                        robust_motion<latent_motion<pose_odometry_gaussian>>,
+                                        appearance_likelihood<configured_rotated_measurement>>;
 
   /// Throws std::invalid_argument for a protocol whose map is empty or smaller than the sensor's
   /// window, or for out-of-range or contradictory configuration values (named by the component
@@ -563,23 +588,27 @@ class localization_experiment {
     const auto appearances = config_.appearances();
     const auto names = appearance_names(appearances);
     const latent_motion_params switching{.switch_probability = config_.switch_probability()};
+    const robust_motion_params lost{.lost_probability = config_.lost()};
     if (config_.headings == 0) {
       v.filter.emplace(
           latent_grid<planar_grid<float>>(positions, names),
-          latent_motion<odometry_gaussian>(
-              odometry_gaussian({.sigma_mm = config_.motion_sigma_mm, .k = config_.motion_k}),
-              switching),
+          robust_motion(
+              latent_motion<odometry_gaussian>(
+                  odometry_gaussian({.sigma_mm = config_.motion_sigma_mm, .k = config_.motion_k}),
+                  switching),
+              lost),
           appearance_likelihood<configured_measurement>(
               configured_measurement(config_, v.visual_map, window_), appearances));
     } else {
       const pose_grid<float> grid(positions, config_.headings);
       v.pose_filter.emplace(
           latent_grid<pose_grid<float>>(grid, names),
-          latent_motion<pose_odometry_gaussian>(
-              pose_odometry_gaussian({.sigma_mm = config_.motion_sigma_mm,
-                                      .k = config_.motion_k,
-                                      .sigma_rad = config_.turn_sigma_rad}),
-              switching),
+          robust_motion(latent_motion<pose_odometry_gaussian>(
+                            pose_odometry_gaussian({.sigma_mm = config_.motion_sigma_mm,
+                                                    .k = config_.motion_k,
+                                                    .sigma_rad = config_.turn_sigma_rad}),
+                            switching),
+                        lost),
           appearance_likelihood<configured_rotated_measurement>(
               configured_rotated_measurement(config_, v.visual_map, grid), appearances));
     }
@@ -636,21 +665,38 @@ class localization_experiment {
       heading = pose_grid<float>::wrap_angle(-pi + 2.0 * pi * heading_rng.uniform());
     }
 
+    // The exploration's faults (none by default): where each touch really is, what odometry
+    // the filter is told. Their own stream, so they do not change the other draws.
+    sim_rng fault_rng(scenario_seed(config_.simulator_seed ^ 0x94D049BB133111EBULL, index));
+    const faulted_sequence faulted =
+        apply_faults(*protocol_, sequence,
+                     planar_grid<float>(protocol_->map_size(), protocol_->mm_per_px, window_),
+                     config_.faults, fault_rng);
+
     filter.reset();
     sequence_result result;
     result.sequence = index;
     for (std::size_t step = 0; step < sequence.size(); ++step) {
       const protocol_step& st = sequence[step];
-      const touch_location& truth = protocol_->locations.at(st.location);
+      const touch_location& truth = faulted.truth[step];
+      const odometry& reported = faulted.reported[step];
+      bool lost_track = false;
       if (step > 0) {
-        if constexpr (pose) {
-          // The arm reports its motion in the sensor's own frame: R(-heading) (dx, dy).
-          const double c = std::cos(heading), sn = std::sin(heading);
-          const double dx = st.measured_motion.dx_mm, dy = st.measured_motion.dy_mm;
-          filter.predict(
-              {.du_mm = c * dx + sn * dy, .dv_mm = -sn * dx + c * dy, .dtheta_rad = 0.0});
-        } else {
-          filter.predict(st.measured_motion);
+        try {
+          if constexpr (pose) {
+            // The arm reports its motion in the sensor's own frame: R(-heading) (dx, dy).
+            const double c = std::cos(heading), sn = std::sin(heading);
+            const double dx = reported.dx_mm, dy = reported.dy_mm;
+            filter.predict(
+                {.du_mm = c * dx + sn * dy, .dv_mm = -sn * dx + c * dy, .dtheta_rad = 0.0});
+          } else {
+            filter.predict(reported);
+          }
+        } catch (const std::domain_error&) {
+          // The odometry carried every state the belief allowed off the map (a fault the
+          // motion model trusts): start again from a uniform belief, as a user would.
+          filter.reset();
+          lost_track = true;
         }
       }
       // Where the sensor really presses on the object: the true map pose carried by the
@@ -681,6 +727,8 @@ class localization_experiment {
       rec.location = st.location;
       rec.true_x_mm = truth.x_mm;
       rec.true_y_mm = truth.y_mm;
+      rec.odometry_outlier = faulted.outlier[step] != 0;
+      rec.lost_track = lost_track;
       rec.accepted = pre.accepted();
       rec.rejection = pre.rejection;
       if (rec.accepted) {

@@ -1,0 +1,52 @@
+// robust_motion: the base model's prediction with a floor under every state.
+#include <doctest/doctest.h>
+
+#include <stdexcept>
+#include <string>
+
+#include "table_filter.hpp"
+#include "tacmap/motion/robust_motion.hpp"
+#include "tacmap/tacmap.hpp"
+#include "test_support.hpp"
+
+using tacmap_test::message_of;
+
+TEST_CASE("robust_motion: (1 - lambda) base + lambda / N, and lambda = 0 is the base model") {
+  const auto grid = tacmap_test::lattice_filter().grid();
+  const tacmap::odometry_gaussian base({.sigma_mm = 1.0, .k = 8});
+  tacmap::belief_array<tacmap_test::table_grid> in =
+      tacmap::belief_array<tacmap_test::table_grid>::Zero(grid.size());
+  in(5 * grid.cols() + 7) = 1.0F;
+  tacmap::belief_array<tacmap_test::table_grid> want(grid.size()), got(grid.size());
+  base.predict(grid, in, want, {.dx_mm = 2.0, .dy_mm = 1.0});
+  tacmap::robust_motion<tacmap::odometry_gaussian>(base).predict(grid, in, got,
+                                                                 {.dx_mm = 2.0, .dy_mm = 1.0});
+  CHECK((got - want).abs().maxCoeff() == 0.0F);
+  const double lambda = 0.01;
+  tacmap::robust_motion<tacmap::odometry_gaussian>(base, {.lost_probability = lambda})
+      .predict(grid, in, got, {.dx_mm = 2.0, .dy_mm = 1.0});
+  const auto n = static_cast<double>(grid.size());
+  for (Eigen::Index i = 0; i < grid.size(); ++i)
+    CHECK(static_cast<double>(got(i)) ==
+          doctest::Approx((1 - lambda) * static_cast<double>(want(i)) + lambda / n).epsilon(1e-5));
+  CHECK(static_cast<double>(got.sum()) == doctest::Approx(1.0).epsilon(1e-5));
+}
+
+TEST_CASE("robust_motion: a move off the map leaves a uniform belief, or throws without a floor") {
+  auto f = tacmap_test::lattice_filter();
+  const tacmap::odometry_gaussian base({.sigma_mm = 1.0, .k = 8});
+  tacmap::belief_array<tacmap_test::table_grid> in =
+      tacmap::belief_array<tacmap_test::table_grid>::Constant(
+          f.grid().size(), 1.0F / static_cast<float>(f.grid().size()));
+  tacmap::belief_array<tacmap_test::table_grid> out(f.grid().size());
+  const tacmap::robust_motion<tacmap::odometry_gaussian> robust(base, {.lost_probability = 0.001});
+  const auto report = robust.predict(f.grid(), in, out, {.dx_mm = 500.0, .dy_mm = 0.0});
+  CHECK(report.mass_lost == 1.0);
+  CHECK((out - in).abs().maxCoeff() < 1e-7F);
+  const tacmap::robust_motion<tacmap::odometry_gaussian> trusting(base);
+  CHECK_THROWS_AS(trusting.predict(f.grid(), in, out, {.dx_mm = 500.0, .dy_mm = 0.0}),
+                  std::domain_error);
+  CHECK(message_of([&] {
+          tacmap::robust_motion<tacmap::odometry_gaussian>(base, {.lost_probability = 1.0});
+        }).find("lost_probability = 1; expected a probability in [0, 1)") != std::string::npos);
+}

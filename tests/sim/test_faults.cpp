@@ -1,0 +1,157 @@
+// Exploration faults (sim/faults.hpp) and what the experiment does with them.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "tacmap/sim/experiment.hpp"
+#include "tacmap/sim/faults.hpp"
+#include "tacmap/sim/protocol.hpp"
+#include "test_support.hpp"
+
+using tacmap_test::message_of;
+
+namespace {
+
+const tacmap::touch_protocol& gecko() {
+  static const tacmap::touch_protocol p =
+      tacmap::load_protocol(std::filesystem::path(TACMAP_DATA_DIR) / "gecko" / "protocol.txt");
+  return p;
+}
+
+tacmap::planar_grid<float> gecko_positions() {
+  return {gecko().map_size(), gecko().mm_per_px, tacmap::tactile_window({}, gecko().mm_per_px)};
+}
+
+}  // namespace
+
+TEST_CASE("faults: none leaves the protocol's truth and odometry as they are") {
+  tacmap::sim_rng rng(1);
+  const auto& seq = gecko().sequences[3];
+  const auto f = tacmap::apply_faults(gecko(), seq, gecko_positions(), {}, rng);
+  REQUIRE(f.truth.size() == seq.size());
+  for (std::size_t t = 0; t < seq.size(); ++t) {
+    CHECK(f.truth[t] == gecko().locations[seq[t].location]);
+    CHECK(f.reported[t].dx_mm == seq[t].measured_motion.dx_mm);
+    CHECK(f.reported[t].dy_mm == seq[t].measured_motion.dy_mm);
+    CHECK(f.outlier[t] == 0);
+  }
+}
+
+TEST_CASE("faults: outliers are off by their size; noise has its sigma") {
+  tacmap::exploration_faults outliers;
+  outliers.outlier_probability = 1.0;
+  outliers.outlier_mm = 8.0;
+  tacmap::exploration_faults noisy;
+  noisy.odometry_sigma_mm = 3.0;
+  double sum2 = 0.0;
+  std::size_t moves = 0;
+  for (std::size_t q = 0; q < gecko().sequences.size(); ++q) {
+    const auto& seq = gecko().sequences[q];
+    tacmap::sim_rng a(q), b(q);
+    const auto o = tacmap::apply_faults(gecko(), seq, gecko_positions(), outliers, a);
+    const auto n = tacmap::apply_faults(gecko(), seq, gecko_positions(), noisy, b);
+    for (std::size_t t = 1; t < seq.size(); ++t) {
+      CHECK(o.outlier[t] == 1);
+      CHECK(std::hypot(o.reported[t].dx_mm - seq[t].measured_motion.dx_mm,
+                       o.reported[t].dy_mm - seq[t].measured_motion.dy_mm) == doctest::Approx(8.0));
+      const double ex = n.reported[t].dx_mm - seq[t].true_motion.dx_mm;
+      const double ey = n.reported[t].dy_mm - seq[t].true_motion.dy_mm;
+      sum2 += ex * ex + ey * ey;
+      moves += 2;
+    }
+  }
+  // 2 x 132 axis errors: the sample sigma within 15 % of 3 mm.
+  CHECK(std::sqrt(sum2 / static_cast<double>(moves)) == doctest::Approx(3.0).epsilon(0.15));
+}
+
+TEST_CASE("faults: a slip and a kidnap move every later touch by one offset, on the map") {
+  const auto positions = gecko_positions();
+  for (std::size_t q = 0; q < gecko().sequences.size(); ++q) {
+    const auto& seq = gecko().sequences[q];
+    tacmap::exploration_faults slip;
+    slip.slip_touch = 4;
+    slip.slip_mm = 20.0;
+    tacmap::exploration_faults kidnap;
+    kidnap.kidnap_touch = 3;
+    tacmap::sim_rng a(q + 10), b(q + 10);
+    const auto s = tacmap::apply_faults(gecko(), seq, positions, slip, a);
+    const auto k = tacmap::apply_faults(gecko(), seq, positions, kidnap, b);
+    for (std::size_t t = 0; t < seq.size(); ++t) {
+      const auto& loc = gecko().locations[seq[t].location];
+      CHECK(s.reported[t].dx_mm == seq[t].measured_motion.dx_mm);  // odometry does not see it
+      const double dx = s.truth[t].x_mm - loc.x_mm, dy = s.truth[t].y_mm - loc.y_mm;
+      if (t < 3) {
+        CHECK(dx == 0.0);
+        CHECK(dy == 0.0);
+      } else {
+        CHECK(std::hypot(dx, dy) == doctest::Approx(20.0));
+        CHECK(dx == doctest::Approx(s.truth[3].x_mm - gecko().locations[seq[3].location].x_mm));
+        CHECK(positions.nearest_state(s.truth[t].x_mm, s.truth[t].y_mm).has_value());
+      }
+      const double kx = k.truth[t].x_mm - loc.x_mm;
+      if (t < 2)
+        CHECK(kx == 0.0);
+      else {
+        CHECK(kx == doctest::Approx(k.truth[2].x_mm - gecko().locations[seq[2].location].x_mm));
+        CHECK(positions.nearest_state(k.truth[t].x_mm, k.truth[t].y_mm).has_value());
+      }
+    }
+  }
+}
+
+TEST_CASE("faults: out-of-range settings are refused with the value") {
+  tacmap::exploration_faults f;
+  f.outlier_probability = 1.5;
+  CHECK(message_of([&] {
+          f.validate();
+        }).find("outlier_probability = 1.5; expected a probability in [0, 1]") !=
+        std::string::npos);
+  f = {};
+  f.slip_touch = 1;
+  CHECK(message_of([&] {
+          f.validate();
+        }).find("slip_touch = 1; expected 0 (no slip) or a touch >= 2") != std::string::npos);
+  f = {};
+  f.odometry_sigma_mm = -1.0;
+  CHECK(message_of([&] { f.validate(); }).find("odometry_sigma_mm = -1") != std::string::npos);
+  f = {};
+  f.kidnap_touch = 40;
+  tacmap::sim_rng rng(1);
+  CHECK(message_of([&] {
+          (void)tacmap::apply_faults(gecko(), gecko().sequences[0], gecko_positions(), f, rng);
+        }).find("a fault at touch 40 of a sequence of 7 touches") != std::string::npos);
+}
+
+TEST_CASE("recovered: back below the threshold within so many touches, and staying") {
+  std::vector<tacmap::touch_record> r(8);
+  const double errors[] = {1, 1, 1, 20, 15, 3, 2, 1};
+  for (std::size_t i = 0; i < r.size(); ++i) r[i].error_mm = errors[i];
+  CHECK(tacmap::recovered(r, 4, 3));  // below from touch 6
+  CHECK(tacmap::recovered(r, 4, 2));
+  CHECK_FALSE(tacmap::recovered(r, 4, 1));
+  r[7].error_mm = 9;  // lost again at the end
+  CHECK_FALSE(tacmap::recovered(r, 4, 3));
+}
+
+TEST_CASE("experiment: odometry that carries the belief off the map restarts it, no abort") {
+  tacmap::localization_config config;
+  config.model = tacmap::measurement_kind::lite;
+  config.features = tacmap::window_features::shared_dense;
+  config.faults.outlier_probability = 1.0;
+  config.faults.outlier_mm = 100.0;  // larger than the map: every move leaves it
+  config.lost_probability = 0.0;     // the paper's motion model: trusts the odometry
+  tacmap::localization_experiment paper(gecko(), config);
+  const auto run = paper.run(0);
+  REQUIRE(run.touches.size() == gecko().sequences[0].size());
+  bool any = false;
+  for (const auto& t : run.touches) any = any || t.lost_track;
+  CHECK(any);
+  // With a floor under the motion the belief is re-spread instead: nothing is refused.
+  config.lost_probability = 0.001;
+  tacmap::localization_experiment robust(gecko(), config);
+  for (const auto& t : robust.run(0).touches) CHECK_FALSE(t.lost_track);
+}
