@@ -82,6 +82,26 @@ void predict_robust(benchmark::State& state) {
 }
 BENCHMARK(predict_robust);
 
+// ... and with a wide component (w = 0.1, 3 mm): three box passes per axis on top.
+void predict_wide(benchmark::State& state) {
+  using robust_t = tacmap::bayes_filter<grid_t, tacmap::robust_motion<tacmap::odometry_gaussian>,
+                                        given_likelihood>;
+  robust_t f(grid_t::paper(),
+             tacmap::robust_motion<tacmap::odometry_gaussian>(
+                 tacmap::odometry_gaussian({.sigma_mm = 1.5, .k = 8}),
+                 {.lost_probability = 0.001, .wide_probability = 0.1, .wide_sigma_mm = 3.0}),
+             given_likelihood{});
+  f.update_log_likelihood(random_log_likelihood(f.grid().size()));
+  const tacmap::odometry moves[2] = {{2.3, -1.7}, {-2.3, 1.7}};
+  int i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(f.predict(moves[i]));
+    i ^= 1;
+  }
+  state.SetItemsProcessed(state.iterations() * f.grid().size());
+}
+BENCHMARK(predict_wide);
+
 // The confidence of the estimate (filter/confidence.hpp): the most probable 5 mm disc and its
 // mass, after every touch.
 void assess_paper(benchmark::State& state) {

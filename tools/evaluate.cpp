@@ -281,6 +281,15 @@ int main(int argc, char** argv) try {
                  "comma-separated to compare; default: the configuration's)")
       ->delimiter(',')
       ->check(CLI::Range(0.0, 0.999));
+  std::vector<double> wide_probabilities;
+  double wide_sigma = 4.0;
+  app.add_option("--wide-probability", wide_probabilities,
+                 "probability that a move is off by more than --motion-sigma: a wide component "
+                 "of --wide-sigma (robust_motion; comma-separated to compare)")
+      ->delimiter(',')
+      ->check(CLI::Range(0.0, 0.999));
+  app.add_option("--wide-sigma", wide_sigma, "the wide component's spread, mm per axis (4)")
+      ->check(CLI::Range(0.01, 100.0));
   app.add_option("--touches", photo_touches,
                  "touches per sequence of the photographs' protocols (7; the gecko's are fixed)")
       ->check(CLI::Range(1, 200));
@@ -446,6 +455,18 @@ int main(int argc, char** argv) try {
     for (const double l : lost_probabilities)
       for (auto c : configs) {
         c.lost_probability = l;
+        expanded.push_back(c);
+      }
+    configs = std::move(expanded);
+  }
+
+  // One copy of every configuration per --wide-probability value.
+  for (auto& c : configs) c.wide_sigma_mm = wide_sigma;
+  if (!wide_probabilities.empty()) {
+    std::vector<tacmap::localization_config> expanded;
+    for (const double w : wide_probabilities)
+      for (auto c : configs) {
+        c.wide_probability = w;
         expanded.push_back(c);
       }
     configs = std::move(expanded);

@@ -50,3 +50,40 @@ TEST_CASE("robust_motion: a move off the map leaves a uniform belief, or throws 
           tacmap::robust_motion<tacmap::odometry_gaussian>(base, {.lost_probability = 1.0});
         }).find("lost_probability = 1; expected a probability in [0, 1)") != std::string::npos);
 }
+
+TEST_CASE("robust_motion: the wide component adds w r (r + 1) px^2 of variance per axis") {
+  // 30 x 30 positions, 1 mm apart: the blur of a mass in the middle stays on the grid.
+  const tacmap_test::table_grid grid({.width = 32, .height = 32}, 1.0, {.width = 3, .height = 3});
+  const Eigen::Index centre = 15 * grid.cols() + 15;
+  const tacmap::odometry_gaussian base({.sigma_mm = 0.5, .k = 8});
+  tacmap::belief_array<tacmap_test::table_grid> in =
+      tacmap::belief_array<tacmap_test::table_grid>::Zero(grid.size());
+  in(centre) = 1.0F;
+  tacmap::belief_array<tacmap_test::table_grid> b(grid.size()), got(grid.size());
+  base.predict(grid, in, b, {});
+  // sigma 2 mm -> box radius 2 -> three passes add 2 x 3 = 6 px^2; half of the mass takes it.
+  const tacmap::robust_motion<tacmap::odometry_gaussian> wide(
+      base, {.wide_probability = 0.5, .wide_sigma_mm = 2.0});
+  wide.predict(grid, in, got, {});
+  CHECK(static_cast<double>(got.sum()) == doctest::Approx(1.0).epsilon(1e-5));
+  CHECK((got >= 0.0F).all());
+  const auto x_variance = [&](const tacmap::belief_array<tacmap_test::table_grid>& p) {
+    double m = 0, m2 = 0;
+    for (Eigen::Index i = 0; i < p.size(); ++i) {
+      const double x = grid.state_mm(i)(0), w = static_cast<double>(p(i));
+      m += w * x;
+      m2 += w * x * x;
+    }
+    return m2 - m * m;
+  };
+  CHECK(x_variance(got) == doctest::Approx(x_variance(b) + 0.5 * 6.0).epsilon(1e-3));
+  // Mean unchanged: the blur is symmetric.
+  double mean = 0;
+  for (Eigen::Index i = 0; i < got.size(); ++i)
+    mean += static_cast<double>(got(i)) * grid.state_mm(i)(0);
+  CHECK(mean == doctest::Approx(grid.state_mm(centre)(0)).epsilon(1e-5));
+  CHECK(message_of([&] {
+          tacmap::robust_motion<tacmap::odometry_gaussian>(
+              base, {.lost_probability = 0.5, .wide_probability = 0.6});
+        }).find("wide_probability = 0.6 (with lost_probability 0.5)") != std::string::npos);
+}

@@ -174,6 +174,12 @@ struct localization_config {
   /// slips and kidnaps but loses 4 sequences without faults.
   static constexpr double default_lost_probability = 0.001;
   [[nodiscard]] double lost() const { return lost_probability.value_or(default_lost_probability); }
+  /// The probability that a move is off by more than `motion_sigma_mm`, and that wider
+  /// component's spread (`robust_motion`). Empty: the defaults below; 0: none.
+  std::optional<double> wide_probability;
+  static constexpr double default_wide_probability = 0.0;
+  double wide_sigma_mm = 4.0;
+  [[nodiscard]] double wide() const { return wide_probability.value_or(default_wide_probability); }
 
   /// The switch probability the filter uses (0 unless the appearance is latent).
   [[nodiscard]] double switch_probability() const {
@@ -184,7 +190,9 @@ struct localization_config {
   /// Throws std::invalid_argument for settings that contradict each other, naming both.
   void validate() const {
     faults.validate();
-    if (lost_probability) robust_motion_params{.lost_probability = *lost_probability}.validate();
+    robust_motion_params{
+        .lost_probability = lost(), .wide_probability = wide(), .wide_sigma_mm = wide_sigma_mm}
+        .validate();
     if (appearance_switch && appearance != appearance_handling::latent)
       detail::fail("localization_config: appearance_switch = ", *appearance_switch,
                    " needs appearance = latent (it switches between appearance hypotheses), but "
@@ -241,6 +249,11 @@ struct localization_config {
       std::ostringstream t;
       t << *lost_probability;
       out += "/lost=" + t.str();
+    }
+    if (wide_probability) {
+      std::ostringstream t;
+      t << *wide_probability << "x" << wide_sigma_mm << "mm";
+      out += "/wide=" + t.str();
     }
 
     return out;
@@ -588,7 +601,9 @@ class localization_experiment {
     const auto appearances = config_.appearances();
     const auto names = appearance_names(appearances);
     const latent_motion_params switching{.switch_probability = config_.switch_probability()};
-    const robust_motion_params lost{.lost_probability = config_.lost()};
+    const robust_motion_params lost{.lost_probability = config_.lost(),
+                                    .wide_probability = config_.wide(),
+                                    .wide_sigma_mm = config_.wide_sigma_mm};
     if (config_.headings == 0) {
       v.filter.emplace(
           latent_grid<planar_grid<float>>(positions, names),
