@@ -449,28 +449,22 @@ int main(int argc, char** argv) try {
           }
   }
 
-  // One copy of every configuration per --lost-probability value.
-  if (!lost_probabilities.empty()) {
+  // One copy of every configuration per --lost-probability and per --wide-probability value.
+  const auto expand = [&](const std::vector<double>& values, auto assign) {
+    if (values.empty()) return;
     std::vector<tacmap::localization_config> expanded;
-    for (const double l : lost_probabilities)
+    for (const double v : values)
       for (auto c : configs) {
-        c.lost_probability = l;
+        assign(c, v);
         expanded.push_back(c);
       }
     configs = std::move(expanded);
-  }
-
-  // One copy of every configuration per --wide-probability value.
+  };
+  expand(lost_probabilities,
+         [](tacmap::localization_config& c, double v) { c.lost_probability = v; });
   for (auto& c : configs) c.wide_sigma_mm = wide_sigma;
-  if (!wide_probabilities.empty()) {
-    std::vector<tacmap::localization_config> expanded;
-    for (const double w : wide_probabilities)
-      for (auto c : configs) {
-        c.wide_probability = w;
-        expanded.push_back(c);
-      }
-    configs = std::move(expanded);
-  }
+  expand(wide_probabilities,
+         [](tacmap::localization_config& c, double v) { c.wide_probability = v; });
 
   // One copy of every configuration per --headings value (NCC only with known orientation).
   {

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "gecko_protocol.hpp"
 #include "table_filter.hpp"
 #include "tacmap/sim/calibration.hpp"
 #include "tacmap/sim/experiment.hpp"
@@ -47,11 +48,7 @@ void add_model_data(tacmap::likelihood_calibration<filter_t>& cal, const filter_
   }
 }
 
-const tacmap::touch_protocol& gecko() {
-  static const tacmap::touch_protocol p =
-      tacmap::load_protocol(std::filesystem::path(TACMAP_DATA_DIR) / "gecko" / "protocol.txt");
-  return p;
-}
+using tacmap_test::gecko;
 
 }  // namespace
 

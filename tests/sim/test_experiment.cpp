@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "gecko_protocol.hpp"
 #include "tacmap/io/png_rgb.hpp"
 #include "tacmap/sim/experiment.hpp"
 #include "tacmap/sim/protocol.hpp"
@@ -24,11 +25,7 @@ std::vector<tacmap::touch_record> records(std::initializer_list<double> errors) 
   return out;
 }
 
-const tacmap::touch_protocol& gecko() {
-  static const tacmap::touch_protocol p =
-      tacmap::load_protocol(std::filesystem::path(TACMAP_DATA_DIR) / "gecko" / "protocol.txt");
-  return p;
-}
+using tacmap_test::gecko;
 
 }  // namespace
 

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "gecko_protocol.hpp"
 #include "tacmap/sim/experiment.hpp"
 #include "tacmap/sim/faults.hpp"
 #include "tacmap/sim/protocol.hpp"
@@ -16,11 +17,7 @@ using tacmap_test::message_of;
 
 namespace {
 
-const tacmap::touch_protocol& gecko() {
-  static const tacmap::touch_protocol p =
-      tacmap::load_protocol(std::filesystem::path(TACMAP_DATA_DIR) / "gecko" / "protocol.txt");
-  return p;
-}
+using tacmap_test::gecko;
 
 tacmap::planar_grid<float> gecko_positions() {
   return {gecko().map_size(), gecko().mm_per_px, tacmap::tactile_window({}, gecko().mm_per_px)};

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "gecko_protocol.hpp"
 #include "tacmap/sim/experiment.hpp"
 #include "tacmap/sim/protocol.hpp"
 #include "tacmap/sim/scenario.hpp"
@@ -18,11 +19,7 @@
 
 namespace {
 
-const tacmap::touch_protocol& gecko() {
-  static const tacmap::touch_protocol p =
-      tacmap::load_protocol(std::filesystem::path(TACMAP_DATA_DIR) / "gecko" / "protocol.txt");
-  return p;
-}
+using tacmap_test::gecko;
 
 // A map with a bright square on a mid-grey ground, and a relief of the same size.
 tacmap::image<float> square_map() {
