@@ -287,8 +287,9 @@ struct touch_record {
   bool lost_track = false;
   bool accepted = true;  ///< false: preprocess rejected the frame, no update
   frame_rejection rejection = frame_rejection::none;
-  /// The belief's P(|position - MAP position| <= 5 mm) after this touch (`assess`): its claim
-  /// that the error is below the success radius. Calibrated when it matches how often it is.
+  /// The belief's P(|position - estimate| <= 5 mm) after this touch (`assess`; the estimate is
+  /// `estimate_x_mm`, `estimate_y_mm`): its claim that `error_mm` is below the success radius.
+  /// Calibrated when it matches how often it is.
   double probability_within = 0.0;
   /// Pose grids: the belief's P(|heading - MAP heading| <= 15 degrees); 1 for known headings.
   double heading_probability = 1.0;
