@@ -162,3 +162,50 @@ TEST_CASE("pose grids: the heading's probability and the position's disc over ev
   CHECK(c.heading_probability == doctest::Approx(0.7));  // 15 degrees around the MAP heading 0
   CHECK(c.verdict == tacmap::verdict::uncertain);        // the heading is not sure enough
 }
+
+TEST_CASE("log_prediction_support: 0 from a uniform prediction, the log Bayes factor otherwise") {
+  auto f = tacmap_test::lattice_filter();
+  const Eigen::Index n = f.grid().size();
+  tacmap::belief_array<grid_t> ll(n);
+  for (Eigen::Index i = 0; i < n; ++i) ll(i) = -0.05F * static_cast<float>(i % 23);
+  // Uniform prediction: it is the uniform belief, whatever the touch.
+  CHECK(f.update(ll).log_prediction_support == doctest::Approx(0.0).epsilon(1e-6));
+
+  // The prediction on one state: log p(z | x0) - log (1/n sum_x p(z | x)).
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) sum += std::exp(static_cast<double>(ll(i)));
+  for (const Eigen::Index at : {Eigen::Index{0}, Eigen::Index{22}}) {
+    CAPTURE(at);
+    tacmap::belief_array<grid_t> prior = tacmap::belief_array<grid_t>::Zero(n);
+    prior(at) = 1.0F;
+    f.set_prior(prior);
+    const double expected = static_cast<double>(ll(at)) - std::log(sum / static_cast<double>(n));
+    CHECK(f.update(ll).log_prediction_support == doctest::Approx(expected).epsilon(1e-5));
+  }
+  // State 0 fits best (support > 0), state 22 (ll = -1.1, about the mean) about as well as
+  // anywhere; a prediction on a state that fits far worse than the rest is contradicted.
+  tacmap::belief_array<grid_t> prior = tacmap::belief_array<grid_t>::Zero(n);
+  prior(5) = 1.0F;
+  f.set_prior(prior);
+  tacmap::belief_array<grid_t> far = ll;
+  far(5) = -30.0F;
+  const auto report = f.update(far);
+  CHECK(report.log_prediction_support < -25.0);
+  const auto c = tacmap::assess(f, f.estimate(), report, tacmap::confidence_params{});
+  CHECK(c.verdict == tacmap::verdict::contradicted);
+  // Turned off, the same touch gets the belief's own verdict.
+  tacmap::confidence_params off;
+  off.contradiction = -std::numeric_limits<double>::infinity();
+  CHECK(tacmap::assess(f, f.estimate(), report, off).verdict != tacmap::verdict::contradicted);
+}
+
+TEST_CASE("confidence_params refuses a contradiction threshold above 0 or NaN") {
+  tacmap::confidence_params p;
+  p.contradiction = 0.5;
+  CHECK_THROWS_WITH_AS(p.validate(), doctest::Contains("contradiction = 0.5"),
+                       std::invalid_argument);
+  p.contradiction = std::numeric_limits<double>::quiet_NaN();
+  CHECK_THROWS_AS(p.validate(), std::invalid_argument);
+  CHECK(std::string(tacmap::to_string(tacmap::verdict::contradicted)) == "contradicted");
+  CHECK(std::string(tacmap::to_string(tacmap::verdict::rejected_frame)) == "rejected_frame");
+}

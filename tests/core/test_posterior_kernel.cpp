@@ -39,11 +39,19 @@ TEST_CASE_TEMPLATE("weight_by_likelihood matches its scalar reference", T, float
     CHECK(scan.max == scan_ref.max);
     std::vector<T> out(n);
     std::vector<T> ref(n);
-    const double sum =
+    const auto sum =
         tacmap::detail::weight_by_likelihood(prior.data(), ll.data(), scan.max, out.data(), n_idx);
-    const double sum_ref = tacmap::detail::weight_by_likelihood_scalar(prior.data(), ll.data(),
-                                                                       scan.max, ref.data(), n_idx);
-    CHECK(sum == doctest::Approx(sum_ref).epsilon(1e-5));
+    const auto sum_ref = tacmap::detail::weight_by_likelihood_scalar(prior.data(), ll.data(),
+                                                                     scan.max, ref.data(), n_idx);
+    CHECK(sum.posterior == doctest::Approx(sum_ref.posterior).epsilon(1e-5));
+    CHECK(sum.likelihood == doctest::Approx(sum_ref.likelihood).epsilon(1e-5));
+    // The factors' sum counts the maximum's factor exp(0) = 1 at least once.
+    CHECK(sum.likelihood >= 1.0 - 1e-6);
+    double factors = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+      if (ll[i] - scan.max >= tacmap::detail::log_factor_floor<T>())
+        factors += std::exp(static_cast<double>(ll[i] - scan.max));
+    CHECK(sum.likelihood == doctest::Approx(factors).epsilon(1e-5));
     for (std::size_t i = 0; i < n; ++i) {
       CHECK(static_cast<double>(out[i]) ==
             doctest::Approx(static_cast<double>(ref[i])).epsilon(1e-5));

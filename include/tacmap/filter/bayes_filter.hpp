@@ -68,6 +68,15 @@ struct update_report {
   /// tau, e.g. on two different maps) are compared by the difference of their sums: the log
   /// Bayes factor. Meaningful as a probability only with a calibrated scale (tacmap-calibrate).
   [[nodiscard]] double log_marginal_likelihood() const { return log_likelihood_max + log_evidence; }
+  /// How much better the prediction explains the touch than not knowing where the sensor is:
+  /// log [ sum_x p(z | x) bel_bar(x) / (1/N sum_x p(z | x)) ], the log Bayes factor of the
+  /// predicted belief against a uniform one over the N states. 0 when the prediction is
+  /// uniform (the first touch), up to log N when the prediction sits exactly on the best
+  /// matches, negative when the touch fits somewhere the filter did not expect better than
+  /// where it did: the signal that odometry, a slip or a kidnap broke the prediction. Unlike
+  /// `log_evidence` it needs no reference level: it is a ratio of two evidences of one touch
+  /// (`doubt_params` in filter/confidence.hpp turns it into a verdict).
+  double log_prediction_support = 0.0;
 };
 
 /// Grids that flag some coordinates as angles: `static constexpr std::array<bool, dimension>
@@ -445,8 +454,9 @@ class bayes_filter {
                                       " is -infinity everywhere (it rules out every state); "
                                       "expected at least one finite value. The belief is "
                                       "unchanged");
-    const double total =
+    const detail::weight_sums sums =
         detail::weight_by_likelihood(belief_.data(), ll.data(), top, scratch_.data(), ll.size());
+    const double total = sums.posterior;
     if (!(total > 0.0) || !std::isfinite(total))
       detail::fail<std::domain_error>(
           "bayes_filter::update: ", source, " gives zero probability to every state the belief ",
@@ -455,7 +465,12 @@ class bayes_filter {
           "The belief is unchanged; call reset() to start again from a uniform belief");
     normalise(scratch_, total);
     belief_.swap(scratch_);
-    return {.log_evidence = std::log(total), .log_likelihood_max = static_cast<double>(top)};
+    // sums.likelihood >= 1 (the maximum's own factor), so the logarithm is finite.
+    const double log_evidence = std::log(total);
+    return {.log_evidence = log_evidence,
+            .log_likelihood_max = static_cast<double>(top),
+            .log_prediction_support = log_evidence - std::log(sums.likelihood) +
+                                      std::log(static_cast<double>(ll.size()))};
   }
 
   // b /= total (b's sum, > 0). When 1 / total overflows the belief's precision (a float sum

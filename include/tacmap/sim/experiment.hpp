@@ -46,6 +46,7 @@
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/grid/pose_grid.hpp"
 #include "tacmap/image.hpp"
+#include "tacmap/localizer.hpp"
 #include "tacmap/measurement/appearance_likelihood.hpp"
 #include "tacmap/measurement/descriptor_likelihood.hpp"
 #include "tacmap/measurement/ncc_likelihood.hpp"
@@ -63,82 +64,9 @@
 
 namespace tacmap {
 
-/// Which measurement model localizes.
-enum class measurement_kind {
-  lite,  ///< "sift_lite": the paper's 2 x 2 x 8 dense SIFT with eq. (1)-(2) (descriptor_likelihood)
-  classic,  ///< "classic_sift": 4 x 4 x 8 dense SIFT, same eq. (1)-(2)
-  ncc,      ///< "ncc": normalised cross-correlation baseline (ncc_likelihood)
-};
-
-/// How the filter relates the map's brightness to the object's height (README, "The photo is
-/// not the touch").
-enum class appearance_handling {
-  /// "fixed": raised parts are assumed to look bright (the paper's gecko; every model before
-  /// the appearance hypotheses). Fails completely on objects whose raised parts are darker.
-  fixed,
-  /// "latent": both relations are hypotheses of the filter (`appearance_likelihood` over a
-  /// `latent_grid`), weighed by the touches' evidence; nothing needs to be known of the object.
-  latent,
-  /// "unsigned": descriptors of unsigned gradient orientation (`unsigned_orientation<D>`,
-  /// opposite orientations folded together, as unsigned-gradient HOG): invariant to the sign
-  /// of contrast at half the orientation resolution. Descriptor models, known orientation.
-  unsigned_gradients,
-  /// "per_patch": each tactile patch matched with whichever sign fits its window patch better
-  /// (`contrast_sign::either_per_patch`): handles a relation that changes across the object, at
-  /// the price of more chance matches. Descriptor models with aligned pairing, known
-  /// orientation.
-  per_patch,
-};
-
-[[nodiscard]] inline const char* to_string(appearance_handling a) {
-  switch (a) {
-    case appearance_handling::fixed:
-      return "fixed";
-    case appearance_handling::latent:
-      return "latent";
-    case appearance_handling::unsigned_gradients:
-      return "unsigned";
-    case appearance_handling::per_patch:
-      return "per_patch";
-  }
-  return "?";
-}
-
-[[nodiscard]] inline const char* to_string(measurement_kind k) {
-  switch (k) {
-    case measurement_kind::lite:
-      return "sift_lite";
-    case measurement_kind::classic:
-      return "classic_sift";
-    case measurement_kind::ncc:
-      return "ncc";
-  }
-  return "?";
-}
-[[nodiscard]] inline const char* to_string(pairing p) {
-  return p == pairing::all_pairs ? "all_pairs" : "aligned";
-}
-[[nodiscard]] inline const char* to_string(likelihood_shape s) {
-  return s == likelihood_shape::inverse ? "inverse" : "exponential";
-}
-[[nodiscard]] inline const char* to_string(window_features f) {
-  return f == window_features::per_window ? "per_window" : "shared_dense";
-}
-
-/// Everything that configures one localization run. Defaults: the paper's choices (SIFT-lite,
-/// all pairs, eq. (2), per-window features, odometry noise sigma 1 mm over k = 8 neighbours).
-struct localization_config {
-  // Defaults: the best descriptor configuration measured (README, "Localization results").
-  measurement_kind model = measurement_kind::classic;
-  pairing pairs = pairing::aligned;                        ///< descriptor models only
-  likelihood_shape shape = likelihood_shape::exponential;  ///< descriptor models only
-  window_features features = window_features::per_window;  ///< descriptor models only
-  /// Temperature: exponential shape (descriptor distance units) or NCC (log p = ncc / tau).
-  /// Empty: the model's own default (descriptor 0.15, NCC 0.1).
-  std::optional<double> tau;
-  double tempering = 1.0;            ///< exponent on the likelihood
-  double motion_sigma_mm = 1.0;      ///< odometry_gaussian sigma (Sec. III-B)
-  int motion_k = 8;                  ///< odometry_gaussian neighbours (paper: 8)
+/// Everything that configures one simulated localization run: the filter (`localizer_config`:
+/// the localizer's own settings and defaults) and the simulated world around it.
+struct localization_config : localizer_config {
   std::uint64_t simulator_seed = 1;  ///< seeds the simulator; each sequence forks its own stream
   simulator_params simulator{};  ///< the simulator's physics (its seed is replaced per sequence)
   /// Camera map, registration and per-press effects (sim/scenario.hpp); ideal by default.
@@ -146,120 +74,16 @@ struct localization_config {
   /// Faults during exploration: odometry outliers and noise, a slip, a kidnap (sim/faults.hpp);
   /// none by default.
   exploration_faults faults{};
-  preprocess_params preprocessing{};  ///< thresholds; mm_per_px is replaced by the map's
-  /// Unknown orientation (issue 6): 0 localizes over (x, y) with the heading known (the paper);
-  /// N >= 1 localizes over (x, y, theta) with a `pose_grid` of N headings, the
-  /// `rotated_descriptor_likelihood` (descriptor models only) and sensor-frame odometry.
-  int headings = 0;
   /// Each sequence's sensor heading drawn uniformly from [-pi, pi) (its own stream of the
   /// simulator seed) instead of 0; the odometry is then reported in the sensor's frame.
   bool random_orientation = false;
-  double turn_sigma_rad = 0.0873;  ///< pose motion: turn noise (headings > 0)
-  /// How the map's brightness relates to height (see `appearance_handling`).
-  /// Default: latent, the best measured (README, "The photo is not the touch").
-  appearance_handling appearance = appearance_handling::latent;
-  /// `latent` only: probability that the appearance hypothesis changes between touches
-  /// (`latent_motion_params::switch_probability`); 0 = a property of the whole object. Empty:
-  /// `default_appearance_switch`.
-  std::optional<double> appearance_switch;
-  /// 0.05: measured equal to 0 on objects of one relation and better on objects whose parts
-  /// differ (README, "The photo is not the touch"); 0.2 lost on the former.
-  static constexpr double default_appearance_switch = 0.05;
-  /// The probability that a move lands the sensor anywhere (`robust_motion`): the floor that
-  /// lets the filter recover from odometry outliers, slips and kidnaps. Empty:
-  /// `default_lost_probability`; 0: the paper's motion model.
-  std::optional<double> lost_probability;
-  /// 0.001: measured equal to 0 without faults (realistic, seeds 1-3: 578 of 594 both) and
-  /// better with every fault (README, "When exploration goes wrong"); 0.01 recovers more after
-  /// slips and kidnaps but loses 4 sequences without faults.
-  static constexpr double default_lost_probability = 0.001;
-  [[nodiscard]] double lost() const { return lost_probability.value_or(default_lost_probability); }
-  /// The probability that a move is off by more than `motion_sigma_mm`, and that wider
-  /// component's spread (`robust_motion`). Empty: the defaults below; 0: none.
-  std::optional<double> wide_probability;
-  static constexpr double default_wide_probability = 0.0;
-  double wide_sigma_mm = 4.0;
-  [[nodiscard]] double wide() const { return wide_probability.value_or(default_wide_probability); }
-
-  /// The switch probability the filter uses (0 unless the appearance is latent).
-  [[nodiscard]] double switch_probability() const {
-    if (appearance != appearance_handling::latent) return 0.0;
-    return appearance_switch.value_or(default_appearance_switch);
-  }
 
   /// Throws std::invalid_argument for settings that contradict each other, naming both.
   void validate() const {
+    localizer_config::validate();
     faults.validate();
-    robust_motion_params{
-        .lost_probability = lost(), .wide_probability = wide(), .wide_sigma_mm = wide_sigma_mm}
-        .validate();
-    if (appearance_switch && appearance != appearance_handling::latent)
-      detail::fail("localization_config: appearance_switch = ", *appearance_switch,
-                   " needs appearance = latent (it switches between appearance hypotheses), but "
-                   "appearance = ",
-                   to_string(appearance), "; set appearance to latent or the switch to 0");
-    const bool descriptor_level = appearance == appearance_handling::unsigned_gradients ||
-                                  appearance == appearance_handling::per_patch;
-    if (descriptor_level && model == measurement_kind::ncc)
-      detail::fail("localization_config: appearance = ", to_string(appearance),
-                   " changes the descriptors, but model = ncc has none; use sift_lite or "
-                   "classic_sift, or appearance = latent (which works with NCC)");
-    if (descriptor_level && headings > 0)
-      detail::fail("localization_config: appearance = ", to_string(appearance),
-                   " is implemented for a known orientation only, but headings = ", headings,
-                   "; use appearance = latent with a pose grid, or headings = 0");
-    if (appearance == appearance_handling::per_patch && pairs == pairing::all_pairs)
-      detail::fail(
-          "localization_config: appearance = per_patch matches patch m against patch m, "
-          "but pairs = all_pairs; use pairs = aligned");
-    if (appearance_switch && !(std::isfinite(*appearance_switch) && *appearance_switch >= 0.0 &&
-                               *appearance_switch <= 0.5))
-      detail::fail("localization_config: appearance_switch = ", *appearance_switch,
-                   "; expected a probability in [0, 0.5] (two hypotheses)");
-  }
-
-  /// The appearance hypotheses this configuration's filter holds.
-  [[nodiscard]] std::vector<tacmap::appearance> appearances() const {
-    if (appearance == appearance_handling::latent) return both_appearances();
-    return {tacmap::appearance::as_photographed};
-  }
-
-  /// A short name for tables: "sift_lite/all_pairs/inverse/per_window", with "/tau=0.5" when
-  /// `tau` is set.
-  [[nodiscard]] std::string name() const {
-    std::string out = model == measurement_kind::ncc
-                          ? std::string("ncc")
-                          : std::string(to_string(model)) + "/" + to_string(pairs) + "/" +
-                                to_string(shape) + "/" + to_string(features);
-    if (headings > 0)
-      out = std::string(to_string(model)) + "/" + to_string(pairs) + "/" + to_string(shape) +
-            "/headings=" + std::to_string(headings);
-    if (tau) {
-      std::ostringstream t;
-      t << *tau;
-      out += "/tau=" + t.str();
-    }
-    if (appearance != appearance_handling::fixed) out += std::string("/") + to_string(appearance);
-    if (appearance_switch) {
-      std::ostringstream t;
-      t << *appearance_switch;
-      out += "/switch=" + t.str();
-    }
-    if (lost_probability) {
-      std::ostringstream t;
-      t << *lost_probability;
-      out += "/lost=" + t.str();
-    }
-    if (wide_probability) {
-      std::ostringstream t;
-      t << *wide_probability << "x" << wide_sigma_mm << "mm";
-      out += "/wide=" + t.str();
-    }
-
-    return out;
   }
 };
-
 /// What happened at one touch.
 struct touch_record {
   std::size_t step = 0;      ///< 0-based position in the sequence (touch number - 1)
@@ -282,6 +106,8 @@ struct touch_record {
   /// appearances()` order; one value 1 for `fixed`).
   std::vector<double> appearance_probability;
   bool odometry_outlier = false;  ///< the move before this touch was an injected outlier
+  /// The object slipped, or the sensor was kidnapped, just before this touch (injected).
+  bool moved_unseen = false;
   /// The motion before this touch carried the whole belief off the map (the filter refused it)
   /// and the run restarted from a uniform belief.
   bool lost_track = false;
@@ -298,6 +124,12 @@ struct touch_record {
   /// This touch's evidence log p(z_t | z_1..t-1) in the model's units
   /// (`update_report::log_marginal_likelihood`); 0 for a rejected frame.
   double log_marginal_likelihood = 0.0;
+  /// This touch's `update_report::log_prediction_support` (0 for a rejected frame): below
+  /// `confidence_params::contradiction` the touch contradicts the prediction.
+  double log_prediction_support = 0.0;
+  /// log_prediction_support < confidence_params{}.contradiction: the verdict a robot would get
+  /// is `contradicted` (`verdict` above keeps the belief's own, for its calibration).
+  bool contradicted = false;
 };
 
 /// One sequence's run. The images are filled only when asked for (`keep_images`).
@@ -365,136 +197,6 @@ struct sequence_result {
   return out;
 }
 
-/// A measurement model chosen at run time from `localization_config::model`: the three shipped
-/// models behind one `log_likelihood`, so one filter type serves every configuration.
-class configured_measurement {
- public:
-  using measurement_type = image<float>;
-
-  configured_measurement(const localization_config& config, const image<float>& map,
-                         pixel_size window)
-      : model_(make(config, map, window)) {}
-
-  template <class G>
-  void log_likelihood(const G& grid, const measurement_type& z, belief_array<G>& out) const {
-    std::visit([&](const auto& m) { m.log_likelihood(grid, z, out); }, model_);
-  }
-
-  /// A touch and its inverted contrast (blocks 0 and 1 of `out`): the model's one-pass version
-  /// where it has one, else two calls.
-  template <class G>
-  void log_likelihood_both_signs(const G& grid, const measurement_type& z,
-                                 typename G::scalar_type* out) const {
-    std::visit(
-        [&](const auto& m) {
-          if constexpr (measures_both_signs<std::remove_cvref_t<decltype(m)>, G>) {
-            m.log_likelihood_both_signs(grid, z, out);
-          } else {
-            const measurement_type images[2] = {z, appearance_transform(z, appearance::inverted)};
-            log_likelihood_each(grid, std::span<const measurement_type>(images), out);
-          }
-        },
-        model_);
-  }
-
-  /// Several measurements at once (block k of `out` for zs[k]): the model's own one-pass
-  /// version where it has one (descriptor models), else one call each.
-  template <class G>
-  void log_likelihood_each(const G& grid, std::span<const measurement_type> zs,
-                           typename G::scalar_type* out) const {
-    std::visit(
-        [&](const auto& m) {
-          if constexpr (measures_each<std::remove_cvref_t<decltype(m)>, G>) {
-            m.log_likelihood_each(grid, zs, out);
-          } else {
-            belief_array<G> block(grid.size());
-            for (std::size_t k = 0; k < zs.size(); ++k) {
-              m.log_likelihood(grid, zs[k], block);
-              Eigen::Map<belief_array<G>>(out + static_cast<Eigen::Index>(k) * grid.size(),
-                                          grid.size()) = block;
-            }
-          }
-        },
-        model_);
-  }
-
- private:
-  using variant_type = std::variant<ncc_likelihood<float>, descriptor_likelihood<sift_lite>,
-                                    descriptor_likelihood<classic_sift>,
-                                    descriptor_likelihood<unsigned_orientation<sift_lite>>,
-                                    descriptor_likelihood<unsigned_orientation<classic_sift>>>;
-
-  static variant_type make(const localization_config& config, const image<float>& map,
-                           pixel_size window) {
-    if (config.model == measurement_kind::ncc) {
-      ncc_params p;
-      if (config.tau) p.tau = *config.tau;
-      p.tempering = config.tempering;
-      return variant_type(std::in_place_index<0>, map, window, p);
-    }
-    descriptor_likelihood_params p;
-    p.pairs = config.pairs;
-    p.shape = config.shape;
-    p.features = config.features;
-    if (config.tau) p.tau = *config.tau;
-    p.tempering = config.tempering;
-    if (config.appearance == appearance_handling::per_patch)
-      p.contrast = contrast_sign::either_per_patch;
-    // Latent appearance: both contrast signs in one pass (dense SIFT's contrast permutation).
-    p.both_signs = config.appearance == appearance_handling::latent && p.pairs == pairing::aligned;
-    const bool lite = config.model == measurement_kind::lite;
-    if (config.appearance == appearance_handling::unsigned_gradients) {
-      if (lite)
-        return variant_type(std::in_place_index<3>, unsigned_orientation<sift_lite>{}, map, window,
-                            p);
-      return variant_type(std::in_place_index<4>, unsigned_orientation<classic_sift>{}, map, window,
-                          p);
-    }
-    if (lite) return variant_type(std::in_place_index<1>, sift_lite{}, map, window, p);
-    return variant_type(std::in_place_index<2>, classic_sift{}, map, window, p);
-  }
-
-  variant_type model_;
-};
-
-/// The (x, y, theta) counterpart of `configured_measurement`: the rotated descriptor models.
-class configured_rotated_measurement {
- public:
-  using measurement_type = image<float>;
-
-  /// Throws std::invalid_argument for NCC (no rotated NCC model ships) or bad parameters.
-  configured_rotated_measurement(const localization_config& config, const image<float>& map,
-                                 const pose_grid<float>& grid)
-      : model_(make(config, map, grid)) {}
-
-  template <class G>
-  void log_likelihood(const G& grid, const measurement_type& z, belief_array<G>& out) const {
-    std::visit([&](const auto& m) { m.log_likelihood(grid, z, out); }, model_);
-  }
-
- private:
-  using variant_type = std::variant<rotated_descriptor_likelihood<sift_lite>,
-                                    rotated_descriptor_likelihood<classic_sift>>;
-
-  static variant_type make(const localization_config& config, const image<float>& map,
-                           const pose_grid<float>& grid) {
-    if (config.model == measurement_kind::ncc)
-      detail::fail("localization_config: headings = ", config.headings,
-                   " (unknown orientation) needs a descriptor model; got ncc. Use sift_lite or "
-                   "classic_sift, or headings = 0 for NCC with a known orientation");
-    rotated_likelihood_params p;
-    p.pairs = config.pairs;
-    p.shape = config.shape;
-    if (config.tau) p.tau = *config.tau;
-    p.tempering = config.tempering;
-    if (config.model == measurement_kind::lite)
-      return variant_type(std::in_place_index<0>, sift_lite{}, map, grid, p);
-    return variant_type(std::in_place_index<1>, classic_sift{}, map, grid, p);
-  }
-
-  variant_type model_;
-};
-
 /// One map and one configuration: the grid, the filter (with its measurement model built once)
 /// and the simulator's relief. `run` replays a sequence from a uniform belief.
 ///
@@ -504,12 +206,8 @@ class configured_rotated_measurement {
 /// walls), so the experiment keeps one filter per polarity it meets (at most two).
 class localization_experiment {
  public:
-  using filter_type =
-      bayes_filter<latent_grid<planar_grid<float>>, robust_motion<latent_motion<odometry_gaussian>>,
-                   appearance_likelihood<configured_measurement>>;
-  using pose_filter_type = bayes_filter<latent_grid<pose_grid<float>>,
-                                        robust_motion<latent_motion<pose_odometry_gaussian>>,
-                                        appearance_likelihood<configured_rotated_measurement>>;
+  using filter_type = planar_localizer_filter;
+  using pose_filter_type = pose_localizer_filter;
 
   /// Throws std::invalid_argument for a protocol whose map is empty or smaller than the sensor's
   /// window, or for out-of-range or contradictory configuration values (named by the component
@@ -524,9 +222,6 @@ class localization_experiment {
     config_.validate();
     config_.scenario.validate();
     config_.preprocessing.mm_per_px = protocol.mm_per_px;
-    if (config_.headings < 0)
-      detail::fail("localization_config: headings = ", config_.headings,
-                   "; expected 0 (known orientation) or the number of headings of a pose grid");
     const relief_polarity polarity = config_.scenario.polarity;
     if (polarity != relief_polarity::dark_raised) build_variant(0);
     if (polarity != relief_polarity::bright_raised) build_variant(1);
@@ -598,51 +293,12 @@ class localization_experiment {
     v.visual_map = camera_image(protocol_->map, v.relief, protocol_->mm_per_px, config_.scenario,
                                 scenario_seed(config_.simulator_seed, 0));
     v.pressed_relief = margin_px_ > 0 ? padded(v.relief, margin_px_) : v.relief;
-    const planar_grid<float> positions(protocol_->map_size(), protocol_->mm_per_px, window_);
-    const auto appearances = config_.appearances();
-    const auto names = appearance_names(appearances);
-    const latent_motion_params switching{.switch_probability = config_.switch_probability()};
-    const robust_motion_params lost{.lost_probability = config_.lost(),
-                                    .wide_probability = config_.wide(),
-                                    .wide_sigma_mm = config_.wide_sigma_mm};
-    if (config_.headings == 0) {
-      v.filter.emplace(
-          latent_grid<planar_grid<float>>(positions, names),
-          robust_motion(
-              latent_motion<odometry_gaussian>(
-                  odometry_gaussian({.sigma_mm = config_.motion_sigma_mm, .k = config_.motion_k}),
-                  switching),
-              lost),
-          appearance_likelihood<configured_measurement>(
-              configured_measurement(config_, v.visual_map, window_), appearances));
-    } else {
-      const pose_grid<float> grid(positions, config_.headings);
-      v.pose_filter.emplace(
-          latent_grid<pose_grid<float>>(grid, names),
-          robust_motion(latent_motion<pose_odometry_gaussian>(
-                            pose_odometry_gaussian({.sigma_mm = config_.motion_sigma_mm,
-                                                    .k = config_.motion_k,
-                                                    .sigma_rad = config_.turn_sigma_rad}),
-                            switching),
-                        lost),
-          appearance_likelihood<configured_rotated_measurement>(
-              configured_rotated_measurement(config_, v.visual_map, grid), appearances));
-    }
+    // The filter a `localizer` with this configuration runs on this map.
+    if (config_.headings == 0)
+      v.filter.emplace(make_planar_filter(config_, v.visual_map, protocol_->mm_per_px, window_));
+    else
+      v.pose_filter.emplace(make_pose_filter(config_, v.visual_map, protocol_->mm_per_px, window_));
     variants_[which].emplace(std::move(v));
-  }
-
-  // The belief over positions: summed over the appearance hypotheses and, for pose grids, over
-  // the headings.
-  template <class Filter>
-  static image<float> position_image(const Filter& filter) {
-    const auto& grid = filter.grid();
-    const auto marginal = marginal_belief(grid, filter.belief());
-    const Eigen::Index plane = grid.rows() * grid.cols();
-    image<float> out = Eigen::Map<const image<float>>(marginal.data(), grid.rows(), grid.cols());
-    for (Eigen::Index layer = 1; layer * plane < marginal.size(); ++layer)
-      out +=
-          Eigen::Map<const image<float>>(marginal.data() + layer * plane, grid.rows(), grid.cols());
-    return out;
   }
 
   template <class Filter>
@@ -744,6 +400,8 @@ class localization_experiment {
       rec.true_x_mm = truth.x_mm;
       rec.true_y_mm = truth.y_mm;
       rec.odometry_outlier = faulted.outlier[step] != 0;
+      rec.moved_unseen =
+          step + 1 == config_.faults.slip_touch || step + 1 == config_.faults.kidnap_touch;
       rec.lost_track = lost_track;
       rec.accepted = pre.accepted();
       rec.rejection = pre.rejection;
@@ -759,6 +417,8 @@ class localization_experiment {
           report = filter.update(pre.pixels);
         }
         rec.log_marginal_likelihood = report.log_marginal_likelihood();
+        rec.log_prediction_support = report.log_prediction_support;
+        rec.contradicted = report.log_prediction_support < confidence_params{}.contradiction;
       } else if (keep_log_likelihoods) {
         result.log_likelihoods.emplace_back();
       }
@@ -780,7 +440,7 @@ class localization_experiment {
       result.touches.push_back(rec);
       if (keep_images) {
         result.tactile_images.push_back(rec.accepted ? pre.pixels : image<float>{});
-        result.beliefs.push_back(position_image(filter));
+        result.beliefs.push_back(position_belief(filter));
       }
     }
     return result;

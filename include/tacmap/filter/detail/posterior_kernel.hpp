@@ -67,21 +67,32 @@ log_likelihood_scan<T> scan_log_likelihood(const T* ll, Eigen::Index n) {
   return s;
 }
 
-/// out(i) = prior(i) * exp(ll(i) - top) (0 below the floor); returns the sum of out.
+/// The two sums of the weighting pass: the unnormalised posterior's, and the likelihood
+/// factors' own (what a uniform prior would have given, times the number of states).
+struct weight_sums {
+  double posterior = 0.0;   ///< sum_i prior(i) * exp(ll(i) - top)
+  double likelihood = 0.0;  ///< sum_i exp(ll(i) - top)
+};
+
+/// out(i) = prior(i) * exp(ll(i) - top) (0 below the floor); returns the sum of out and of the
+/// factors exp(ll(i) - top).
 template <class T>
-double weight_by_likelihood_scalar(const T* prior, const T* ll, T top, T* out, Eigen::Index n) {
+weight_sums weight_by_likelihood_scalar(const T* prior, const T* ll, T top, T* out,
+                                        Eigen::Index n) {
   const T floor = log_factor_floor<T>();
-  double sum = 0.0;
+  weight_sums sums;
   for (Eigen::Index i = 0; i < n; ++i) {
     const T d = ll[i] - top;
-    out[i] = d < floor ? T(0) : prior[i] * std::exp(d);
-    sum += static_cast<double>(out[i]);
+    const T factor = d < floor ? T(0) : std::exp(d);
+    out[i] = prior[i] * factor;
+    sums.posterior += static_cast<double>(out[i]);
+    sums.likelihood += static_cast<double>(factor);
   }
-  return sum;
+  return sums;
 }
 
 template <class T>
-double weight_by_likelihood(const T* prior, const T* ll, T top, T* out, Eigen::Index n) {
+weight_sums weight_by_likelihood(const T* prior, const T* ll, T top, T* out, Eigen::Index n) {
   using batch = xsimd::batch<T>;
   constexpr auto width = static_cast<Eigen::Index>(batch::size);
   const Eigen::Index vec_end = n - n % width;
@@ -89,16 +100,20 @@ double weight_by_likelihood(const T* prior, const T* ll, T top, T* out, Eigen::I
   const batch top_b(top);
   const batch zero(T(0));
   batch sum(T(0));
+  batch factor_sum(T(0));
   for (Eigen::Index i = 0; i < vec_end; i += width) {
     const batch d = batch::load_unaligned(ll + i) - top_b;
-    const batch w =
-        xsimd::select(d < floor, zero, batch::load_unaligned(prior + i) * xsimd::exp(d));
+    const batch factor = xsimd::select(d < floor, zero, xsimd::exp(d));
+    const batch w = batch::load_unaligned(prior + i) * factor;
     w.store_unaligned(out + i);
     sum += w;
+    factor_sum += factor;
   }
-  return static_cast<double>(xsimd::hadd(sum)) +
-         weight_by_likelihood_scalar(prior + vec_end, ll + vec_end, top, out + vec_end,
-                                     n - vec_end);
+  weight_sums sums =
+      weight_by_likelihood_scalar(prior + vec_end, ll + vec_end, top, out + vec_end, n - vec_end);
+  sums.posterior += static_cast<double>(xsimd::hadd(sum));
+  sums.likelihood += static_cast<double>(xsimd::hadd(factor_sum));
+  return sums;
 }
 
 }  // namespace tacmap::detail

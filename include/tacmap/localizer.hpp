@@ -1,0 +1,790 @@
+// tacmap: the front door — one object that turns a map image, tactile frames and the arm's
+// motion into an estimate of where the sensor touches, with a verdict a robot can act on.
+//
+// `localizer` is a thin composition of the library's pieces, not a second filter: the map's
+// `planar_grid` (or a `pose_grid` when the heading is unknown) with the latent appearance
+// (`latent_grid`), the measurement model `localizer_config` chooses (`configured_measurement`),
+// the odometry model behind `robust_motion`, `preprocess` for raw frames (Sec. IV-A) and
+// `assess` for the verdict. Each `touch` is one step of the paper's Table 1: predict with the
+// motion since the previous touch, update with the frame. `localization_experiment`
+// (sim/experiment.hpp) builds its filters with the same `make_filter` functions, so what
+// tacmap-evaluate measures is what a localizer runs.
+#pragma once
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <span>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/descriptor/unsigned_orientation.hpp"
+#include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/filter/confidence.hpp"
+#include "tacmap/grid/latent_grid.hpp"
+#include "tacmap/grid/planar_grid.hpp"
+#include "tacmap/grid/pose_grid.hpp"
+#include "tacmap/image.hpp"
+#include "tacmap/measurement/appearance_likelihood.hpp"
+#include "tacmap/measurement/descriptor_likelihood.hpp"
+#include "tacmap/measurement/ncc_likelihood.hpp"
+#include "tacmap/measurement/rotated_descriptor_likelihood.hpp"
+#include "tacmap/motion/latent_motion.hpp"
+#include "tacmap/motion/odometry_gaussian.hpp"
+#include "tacmap/motion/pose_odometry_gaussian.hpp"
+#include "tacmap/motion/robust_motion.hpp"
+#include "tacmap/tactile/frame.hpp"
+#include "tacmap/tactile/preprocess.hpp"
+
+namespace tacmap {
+
+/// Which measurement model localizes.
+enum class measurement_kind {
+  lite,  ///< "sift_lite": the paper's 2 x 2 x 8 dense SIFT with eq. (1)-(2) (descriptor_likelihood)
+  classic,  ///< "classic_sift": 4 x 4 x 8 dense SIFT, same eq. (1)-(2)
+  ncc,      ///< "ncc": normalised cross-correlation baseline (ncc_likelihood)
+};
+
+/// How the filter relates the map's brightness to the object's height (README, "The photo is
+/// not the touch").
+enum class appearance_handling {
+  /// "fixed": raised parts are assumed to look bright (the paper's gecko; every model before
+  /// the appearance hypotheses). Fails completely on objects whose raised parts are darker.
+  fixed,
+  /// "latent": both relations are hypotheses of the filter (`appearance_likelihood` over a
+  /// `latent_grid`), weighed by the touches' evidence; nothing needs to be known of the object.
+  latent,
+  /// "unsigned": descriptors of unsigned gradient orientation (`unsigned_orientation<D>`,
+  /// opposite orientations folded together, as unsigned-gradient HOG): invariant to the sign
+  /// of contrast at half the orientation resolution. Descriptor models, known orientation.
+  unsigned_gradients,
+  /// "per_patch": each tactile patch matched with whichever sign fits its window patch better
+  /// (`contrast_sign::either_per_patch`): handles a relation that changes across the object, at
+  /// the price of more chance matches. Descriptor models with aligned pairing, known
+  /// orientation.
+  per_patch,
+};
+
+[[nodiscard]] inline const char* to_string(appearance_handling a) {
+  switch (a) {
+    case appearance_handling::fixed:
+      return "fixed";
+    case appearance_handling::latent:
+      return "latent";
+    case appearance_handling::unsigned_gradients:
+      return "unsigned";
+    case appearance_handling::per_patch:
+      return "per_patch";
+  }
+  return "?";
+}
+
+[[nodiscard]] inline const char* to_string(measurement_kind k) {
+  switch (k) {
+    case measurement_kind::lite:
+      return "sift_lite";
+    case measurement_kind::classic:
+      return "classic_sift";
+    case measurement_kind::ncc:
+      return "ncc";
+  }
+  return "?";
+}
+[[nodiscard]] inline const char* to_string(pairing p) {
+  return p == pairing::all_pairs ? "all_pairs" : "aligned";
+}
+[[nodiscard]] inline const char* to_string(likelihood_shape s) {
+  return s == likelihood_shape::inverse ? "inverse" : "exponential";
+}
+[[nodiscard]] inline const char* to_string(window_features f) {
+  return f == window_features::per_window ? "per_window" : "shared_dense";
+}
+
+/// Everything that configures the filter a `localizer` (or a simulated experiment) runs: the
+/// measurement model, the motion model, the latent appearance, preprocessing and the verdict.
+/// Defaults: the best measured (README, "Localization results", "The photo is not the touch",
+/// "Confidence", "When exploration goes wrong"); the paper's own configuration is
+/// `localizer_config::paper()`.
+struct localizer_config {
+  // Defaults: the best descriptor configuration measured (README, "Localization results").
+  measurement_kind model = measurement_kind::classic;
+  pairing pairs = pairing::aligned;                        ///< descriptor models only
+  likelihood_shape shape = likelihood_shape::exponential;  ///< descriptor models only
+  window_features features = window_features::per_window;  ///< descriptor models only
+  /// Temperature: exponential shape (descriptor distance units) or NCC (log p = ncc / tau).
+  /// Empty: the model's own default (descriptor 0.15, NCC 0.1).
+  std::optional<double> tau;
+  double tempering = 1.0;             ///< exponent on the likelihood
+  double motion_sigma_mm = 1.0;       ///< odometry_gaussian sigma (Sec. III-B)
+  int motion_k = 8;                   ///< odometry_gaussian neighbours (paper: 8)
+  preprocess_params preprocessing{};  ///< frame thresholds; mm_per_px is replaced by the map's
+  /// When the verdict is "localized" or "contradicted" (`assess`).
+  confidence_params confidence{};
+  /// Unknown orientation (issue 6): 0 localizes over (x, y) with the heading known (the paper);
+  /// N >= 1 localizes over (x, y, theta) with a `pose_grid` of N headings, the
+  /// `rotated_descriptor_likelihood` (descriptor models only) and sensor-frame odometry.
+  int headings = 0;
+  double turn_sigma_rad = 0.0873;  ///< pose motion: turn noise (headings > 0)
+  /// How the map's brightness relates to height (see `appearance_handling`).
+  /// Default: latent, the best measured (README, "The photo is not the touch").
+  appearance_handling appearance = appearance_handling::latent;
+  /// `latent` only: probability that the appearance hypothesis changes between touches
+  /// (`latent_motion_params::switch_probability`); 0 = a property of the whole object. Empty:
+  /// `default_appearance_switch`.
+  std::optional<double> appearance_switch;
+  /// 0.05: measured equal to 0 on objects of one relation and better on objects whose parts
+  /// differ (README, "The photo is not the touch"); 0.2 lost on the former.
+  static constexpr double default_appearance_switch = 0.05;
+  /// The probability that a move lands the sensor anywhere (`robust_motion`): the floor that
+  /// lets the filter recover from odometry outliers, slips and kidnaps. Empty:
+  /// `default_lost_probability`; 0: the paper's motion model.
+  std::optional<double> lost_probability;
+  /// 0.001: measured equal to 0 without faults (realistic, seeds 1-3: 578 of 594 both) and
+  /// better with every fault (README, "When exploration goes wrong"); 0.01 recovers more after
+  /// slips and kidnaps but loses 4 sequences without faults.
+  static constexpr double default_lost_probability = 0.001;
+  [[nodiscard]] double lost() const { return lost_probability.value_or(default_lost_probability); }
+  /// The probability that a move is off by more than `motion_sigma_mm`, and that wider
+  /// component's spread (`robust_motion`). Empty: the defaults below; 0: none.
+  std::optional<double> wide_probability;
+  static constexpr double default_wide_probability = 0.0;
+  double wide_sigma_mm = 4.0;
+  [[nodiscard]] double wide() const { return wide_probability.value_or(default_wide_probability); }
+
+  /// The paper's configuration (Sec. III-C, IV): SIFT-lite, every patch against every patch
+  /// (eq. (1)), the inverse likelihood (eq. (2)), per-window features, a fixed appearance
+  /// (raised parts bright) and the Gaussian motion model without a floor.
+  [[nodiscard]] static localizer_config paper() {
+    localizer_config c;
+    c.model = measurement_kind::lite;
+    c.pairs = pairing::all_pairs;
+    c.shape = likelihood_shape::inverse;
+    c.features = window_features::per_window;
+    c.appearance = appearance_handling::fixed;
+    c.lost_probability = 0.0;
+    return c;
+  }
+
+  /// The switch probability the filter uses (0 unless the appearance is latent).
+  [[nodiscard]] double switch_probability() const {
+    if (appearance != appearance_handling::latent) return 0.0;
+    return appearance_switch.value_or(default_appearance_switch);
+  }
+
+  /// Throws std::invalid_argument for settings that contradict each other, naming both.
+  void validate() const {
+    confidence.validate();
+    if (!(std::isfinite(motion_sigma_mm) && motion_sigma_mm > 0.0))
+      detail::fail("localizer_config: motion_sigma_mm = ", motion_sigma_mm,
+                   "; expected the odometry's noise per axis, a finite value > 0 mm (e.g. 1)");
+    if (motion_k <= 0)
+      detail::fail("localizer_config: motion_k = ", motion_k,
+                   "; expected a number of neighbours > 0 (the paper: 8)");
+    if (headings < 0)
+      detail::fail("localizer_config: headings = ", headings,
+                   "; expected 0 (known orientation) or the number of headings of a pose grid");
+    robust_motion_params{
+        .lost_probability = lost(), .wide_probability = wide(), .wide_sigma_mm = wide_sigma_mm}
+        .validate();
+    if (appearance_switch && appearance != appearance_handling::latent)
+      detail::fail("localizer_config: appearance_switch = ", *appearance_switch,
+                   " needs appearance = latent (it switches between appearance hypotheses), but "
+                   "appearance = ",
+                   to_string(appearance), "; set appearance to latent or the switch to 0");
+    const bool descriptor_level = appearance == appearance_handling::unsigned_gradients ||
+                                  appearance == appearance_handling::per_patch;
+    if (descriptor_level && model == measurement_kind::ncc)
+      detail::fail("localizer_config: appearance = ", to_string(appearance),
+                   " changes the descriptors, but model = ncc has none; use sift_lite or "
+                   "classic_sift, or appearance = latent (which works with NCC)");
+    if (descriptor_level && headings > 0)
+      detail::fail("localizer_config: appearance = ", to_string(appearance),
+                   " is implemented for a known orientation only, but headings = ", headings,
+                   "; use appearance = latent with a pose grid, or headings = 0");
+    if (appearance == appearance_handling::per_patch && pairs == pairing::all_pairs)
+      detail::fail(
+          "localization_config: appearance = per_patch matches patch m against patch m, "
+          "but pairs = all_pairs; use pairs = aligned");
+    if (appearance_switch && !(std::isfinite(*appearance_switch) && *appearance_switch >= 0.0 &&
+                               *appearance_switch <= 0.5))
+      detail::fail("localizer_config: appearance_switch = ", *appearance_switch,
+                   "; expected a probability in [0, 0.5] (two hypotheses)");
+  }
+
+  /// The appearance hypotheses this configuration's filter holds.
+  [[nodiscard]] std::vector<tacmap::appearance> appearances() const {
+    if (appearance == appearance_handling::latent) return both_appearances();
+    return {tacmap::appearance::as_photographed};
+  }
+
+  /// A short name for tables: "sift_lite/all_pairs/inverse/per_window", with "/tau=0.5" when
+  /// `tau` is set.
+  [[nodiscard]] std::string name() const {
+    std::string out = model == measurement_kind::ncc
+                          ? std::string("ncc")
+                          : std::string(to_string(model)) + "/" + to_string(pairs) + "/" +
+                                to_string(shape) + "/" + to_string(features);
+    if (headings > 0)
+      out = std::string(to_string(model)) + "/" + to_string(pairs) + "/" + to_string(shape) +
+            "/headings=" + std::to_string(headings);
+    if (tau) {
+      std::ostringstream t;
+      t << *tau;
+      out += "/tau=" + t.str();
+    }
+    if (appearance != appearance_handling::fixed) out += std::string("/") + to_string(appearance);
+    if (appearance_switch) {
+      std::ostringstream t;
+      t << *appearance_switch;
+      out += "/switch=" + t.str();
+    }
+    if (lost_probability) {
+      std::ostringstream t;
+      t << *lost_probability;
+      out += "/lost=" + t.str();
+    }
+    if (wide_probability) {
+      std::ostringstream t;
+      t << *wide_probability << "x" << wide_sigma_mm << "mm";
+      out += "/wide=" + t.str();
+    }
+
+    return out;
+  }
+};
+
+/// A measurement model chosen at run time from `localizer_config::model`: the three shipped
+/// models behind one `log_likelihood`, so one filter type serves every configuration.
+class configured_measurement {
+ public:
+  using measurement_type = image<float>;
+
+  configured_measurement(const localizer_config& config, const image<float>& map, pixel_size window)
+      : model_(make(config, map, window)) {}
+
+  template <class G>
+  void log_likelihood(const G& grid, const measurement_type& z, belief_array<G>& out) const {
+    std::visit([&](const auto& m) { m.log_likelihood(grid, z, out); }, model_);
+  }
+
+  /// A touch and its inverted contrast (blocks 0 and 1 of `out`): the model's one-pass version
+  /// where it has one, else two calls.
+  template <class G>
+  void log_likelihood_both_signs(const G& grid, const measurement_type& z,
+                                 typename G::scalar_type* out) const {
+    std::visit(
+        [&](const auto& m) {
+          if constexpr (measures_both_signs<std::remove_cvref_t<decltype(m)>, G>) {
+            m.log_likelihood_both_signs(grid, z, out);
+          } else {
+            const measurement_type images[2] = {z, appearance_transform(z, appearance::inverted)};
+            log_likelihood_each(grid, std::span<const measurement_type>(images), out);
+          }
+        },
+        model_);
+  }
+
+  /// Several measurements at once (block k of `out` for zs[k]): the model's own one-pass
+  /// version where it has one (descriptor models), else one call each.
+  template <class G>
+  void log_likelihood_each(const G& grid, std::span<const measurement_type> zs,
+                           typename G::scalar_type* out) const {
+    std::visit(
+        [&](const auto& m) {
+          if constexpr (measures_each<std::remove_cvref_t<decltype(m)>, G>) {
+            m.log_likelihood_each(grid, zs, out);
+          } else {
+            belief_array<G> block(grid.size());
+            for (std::size_t k = 0; k < zs.size(); ++k) {
+              m.log_likelihood(grid, zs[k], block);
+              Eigen::Map<belief_array<G>>(out + static_cast<Eigen::Index>(k) * grid.size(),
+                                          grid.size()) = block;
+            }
+          }
+        },
+        model_);
+  }
+
+ private:
+  using variant_type = std::variant<ncc_likelihood<float>, descriptor_likelihood<sift_lite>,
+                                    descriptor_likelihood<classic_sift>,
+                                    descriptor_likelihood<unsigned_orientation<sift_lite>>,
+                                    descriptor_likelihood<unsigned_orientation<classic_sift>>>;
+
+  static variant_type make(const localizer_config& config, const image<float>& map,
+                           pixel_size window) {
+    if (config.model == measurement_kind::ncc) {
+      ncc_params p;
+      if (config.tau) p.tau = *config.tau;
+      p.tempering = config.tempering;
+      return variant_type(std::in_place_index<0>, map, window, p);
+    }
+    descriptor_likelihood_params p;
+    p.pairs = config.pairs;
+    p.shape = config.shape;
+    p.features = config.features;
+    if (config.tau) p.tau = *config.tau;
+    p.tempering = config.tempering;
+    if (config.appearance == appearance_handling::per_patch)
+      p.contrast = contrast_sign::either_per_patch;
+    // Latent appearance: both contrast signs in one pass (dense SIFT's contrast permutation).
+    p.both_signs = config.appearance == appearance_handling::latent && p.pairs == pairing::aligned;
+    const bool lite = config.model == measurement_kind::lite;
+    if (config.appearance == appearance_handling::unsigned_gradients) {
+      if (lite)
+        return variant_type(std::in_place_index<3>, unsigned_orientation<sift_lite>{}, map, window,
+                            p);
+      return variant_type(std::in_place_index<4>, unsigned_orientation<classic_sift>{}, map, window,
+                          p);
+    }
+    if (lite) return variant_type(std::in_place_index<1>, sift_lite{}, map, window, p);
+    return variant_type(std::in_place_index<2>, classic_sift{}, map, window, p);
+  }
+
+  variant_type model_;
+};
+
+/// The (x, y, theta) counterpart of `configured_measurement`: the rotated descriptor models.
+class configured_rotated_measurement {
+ public:
+  using measurement_type = image<float>;
+
+  /// Throws std::invalid_argument for NCC (no rotated NCC model ships) or bad parameters.
+  configured_rotated_measurement(const localizer_config& config, const image<float>& map,
+                                 const pose_grid<float>& grid)
+      : model_(make(config, map, grid)) {}
+
+  template <class G>
+  void log_likelihood(const G& grid, const measurement_type& z, belief_array<G>& out) const {
+    std::visit([&](const auto& m) { m.log_likelihood(grid, z, out); }, model_);
+  }
+
+ private:
+  using variant_type = std::variant<rotated_descriptor_likelihood<sift_lite>,
+                                    rotated_descriptor_likelihood<classic_sift>>;
+
+  static variant_type make(const localizer_config& config, const image<float>& map,
+                           const pose_grid<float>& grid) {
+    if (config.model == measurement_kind::ncc)
+      detail::fail("localizer_config: headings = ", config.headings,
+                   " (unknown orientation) needs a descriptor model; got ncc. Use sift_lite or "
+                   "classic_sift, or headings = 0 for NCC with a known orientation");
+    rotated_likelihood_params p;
+    p.pairs = config.pairs;
+    p.shape = config.shape;
+    if (config.tau) p.tau = *config.tau;
+    p.tempering = config.tempering;
+    if (config.model == measurement_kind::lite)
+      return variant_type(std::in_place_index<0>, sift_lite{}, map, grid, p);
+    return variant_type(std::in_place_index<1>, classic_sift{}, map, grid, p);
+  }
+
+  variant_type model_;
+};
+
+/// The filter a planar `localizer` runs (known heading): positions x appearance hypotheses.
+using planar_localizer_filter =
+    bayes_filter<latent_grid<planar_grid<float>>, robust_motion<latent_motion<odometry_gaussian>>,
+                 appearance_likelihood<configured_measurement>>;
+/// The filter a `localizer` with unknown heading runs: (x, y, theta) x appearance hypotheses.
+using pose_localizer_filter = bayes_filter<latent_grid<pose_grid<float>>,
+                                           robust_motion<latent_motion<pose_odometry_gaussian>>,
+                                           appearance_likelihood<configured_rotated_measurement>>;
+
+namespace detail {
+
+inline robust_motion_params robust_params(const localizer_config& c) {
+  return {
+      .lost_probability = c.lost(), .wide_probability = c.wide(), .wide_sigma_mm = c.wide_sigma_mm};
+}
+
+}  // namespace detail
+
+/// The planar filter `config` describes for `map` (intensities) at `mm_per_px`, with a sensor
+/// window of `window` px: what `localizer` and `localization_experiment` run. Throws
+/// std::invalid_argument for an invalid configuration or a map smaller than the window.
+[[nodiscard]] inline planar_localizer_filter make_planar_filter(const localizer_config& config,
+                                                                const image<float>& map,
+                                                                double mm_per_px,
+                                                                pixel_size window) {
+  config.validate();
+  const planar_grid<float> positions({.width = map.cols(), .height = map.rows()}, mm_per_px,
+                                     window);
+  const auto appearances = config.appearances();
+  return planar_localizer_filter(
+      latent_grid<planar_grid<float>>(positions, appearance_names(appearances)),
+      robust_motion(
+          latent_motion<odometry_gaussian>(
+              odometry_gaussian({.sigma_mm = config.motion_sigma_mm, .k = config.motion_k}),
+              {.switch_probability = config.switch_probability()}),
+          detail::robust_params(config)),
+      appearance_likelihood<configured_measurement>(configured_measurement(config, map, window),
+                                                    appearances));
+}
+
+/// The (x, y, theta) filter for `config.headings` > 0, as `make_planar_filter`.
+[[nodiscard]] inline pose_localizer_filter make_pose_filter(const localizer_config& config,
+                                                            const image<float>& map,
+                                                            double mm_per_px, pixel_size window) {
+  config.validate();
+  if (config.headings <= 0)
+    detail::fail("make_pose_filter: headings = ", config.headings,
+                 "; expected the number of headings of a pose grid (> 0), e.g. 36");
+  const pose_grid<float> grid(
+      planar_grid<float>({.width = map.cols(), .height = map.rows()}, mm_per_px, window),
+      config.headings);
+  const auto appearances = config.appearances();
+  return pose_localizer_filter(
+      latent_grid<pose_grid<float>>(grid, appearance_names(appearances)),
+      robust_motion(latent_motion<pose_odometry_gaussian>(
+                        pose_odometry_gaussian({.sigma_mm = config.motion_sigma_mm,
+                                                .k = config.motion_k,
+                                                .sigma_rad = config.turn_sigma_rad}),
+                        {.switch_probability = config.switch_probability()}),
+                    detail::robust_params(config)),
+      appearance_likelihood<configured_rotated_measurement>(
+          configured_rotated_measurement(config, map, grid), appearances));
+}
+
+/// The belief over positions as a `rows() x cols()` image of the grid's positions: summed over
+/// the latent hypotheses and, for pose grids, over the headings.
+template <class Filter>
+[[nodiscard]] image<float> position_belief(const Filter& filter) {
+  const auto& grid = filter.grid();
+  const auto marginal = marginal_belief(grid, filter.belief());
+  const Eigen::Index plane = grid.rows() * grid.cols();
+  image<float> out = Eigen::Map<const image<float>>(marginal.data(), grid.rows(), grid.cols());
+  for (Eigen::Index layer = 1; layer * plane < marginal.size(); ++layer)
+    out +=
+        Eigen::Map<const image<float>>(marginal.data() + layer * plane, grid.rows(), grid.cols());
+  return out;
+}
+
+/// Where the arm says the sensor is, in the arm's own frame (mm, radians): what `touch_at`
+/// takes. With a known heading (`headings` = 0) the arm's x and y axes must be parallel to the
+/// map's (x to the right along columns, y down along rows); with unknown heading any frame
+/// will do, because only motion relative to the sensor is used.
+struct arm_pose {
+  double x_mm = 0.0;
+  double y_mm = 0.0;
+  double theta_rad = 0.0;  ///< the sensor's yaw in the arm's frame
+};
+
+/// What one touch gave: the estimate, how sure the filter is of it, and what to do.
+struct touch_result {
+  /// localized: act on `position_mm`; uncertain: touch again; contradicted: this touch fits
+  /// elsewhere much better than where the filter expected it (slip, outlier, kidnap?) — touch
+  /// again near here or re-grasp; rejected_frame: the frame was no touch (the arm's motion was
+  /// still applied).
+  tacmap::verdict verdict = tacmap::verdict::uncertain;
+  /// The estimate (map frame, mm): the centre of the disc of `confidence.radius_mm` that holds
+  /// the most belief, the position most probably within that radius of the truth.
+  Eigen::Vector2d position_mm = Eigen::Vector2d::Zero();
+  /// The sensor's heading on the map (most probable heading); 0 when it is known (planar).
+  double heading_rad = 0.0;
+  /// The belief's P(|position - position_mm| <= radius): calibrated with the default scale
+  /// (README, "Confidence").
+  double probability_within = 0.0;
+  /// P(|heading - heading_rad| <= heading tolerance); 1 when the heading is known.
+  double heading_probability = 1.0;
+  /// The single most probable state's position (mm) and the belief's covariance of position
+  /// (mm^2), entropy over positions (nats).
+  Eigen::Vector2d most_probable_mm = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d covariance_mm2 = Eigen::Matrix2d::Zero();
+  double entropy_nats = 0.0;
+  /// Posterior of each appearance hypothesis (`localizer_config::appearances()` order: as
+  /// photographed, inverted), or {1} for a fixed appearance.
+  std::vector<double> appearance_probability;
+  /// This touch's `update_report::log_prediction_support` and `log_marginal_likelihood()`;
+  /// 0 for a rejected frame.
+  double log_prediction_support = 0.0;
+  double log_marginal_likelihood = 0.0;
+  /// Why the frame was rejected (none when it was used).
+  frame_rejection rejection = frame_rejection::none;
+  /// The filter started again from a uniform belief at this touch: the motion carried every
+  /// state the belief allowed off the map, or the touch ruled out every one of them.
+  bool restarted = false;
+  /// Touches used since construction or `reset()`, this one included.
+  std::size_t touches = 0;
+
+  [[nodiscard]] bool accepted() const { return rejection == frame_rejection::none; }
+};
+
+/// One object from map to estimate. Build it from the map image (intensities, any range, row 0
+/// at the top), the map's scale and the sensor's geometry; call `touch` for every frame with
+/// the arm's motion since the previous call (or `touch_at` with the arm's pose).
+///
+///     tacmap::localizer loc(map, 0.2);                        // defaults: the best measured
+///     auto r = loc.touch(frame);                              // first touch
+///     r = loc.touch(frame, tacmap::odometry{.dx_mm = 4.0});   // moved 4 mm to the right
+///     if (r.verdict == tacmap::verdict::localized) use(r.position_mm);
+///
+/// Preparing the map (the measurement model's descriptors of every window) happens once, in
+/// the constructor; `reset()` starts a new exploration on the same map. Not thread-safe: one
+/// localizer per thread.
+class localizer {
+ public:
+  /// Throws std::invalid_argument for an empty or non-finite map, a scale that is not a finite
+  /// positive number, a map smaller than the sensor's footprint, or an invalid configuration
+  /// (each named with what was expected).
+  localizer(image<float> map, double mm_per_px, localizer_config config = {},
+            taxel_geometry sensor = {})
+      : map_(checked_map(std::move(map), mm_per_px)),
+        mm_per_px_(mm_per_px),
+        config_(std::move(config)),
+        sensor_(sensor),
+        window_(checked_window(map_, mm_per_px_, sensor_)) {
+    config_.validate();
+    config_.preprocessing.mm_per_px = mm_per_px_;
+    if (config_.headings == 0)
+      planar_.emplace(make_planar_filter(config_, map_, mm_per_px_, window_));
+    else
+      pose_.emplace(make_pose_filter(config_, map_, mm_per_px_, window_));
+  }
+
+  /// The first touch of an exploration (or one without motion since the previous touch).
+  touch_result touch(const tactile_frame& frame) { return step(frame, std::nullopt); }
+
+  /// A touch after the sensor moved by `moved` (map frame, mm) since the previous call. Known
+  /// heading only (for unknown heading the map frame's motion is unknown: give `sensor_odometry`
+  /// in the sensor's frame, or use `touch_at`). The motion of the first call after
+  /// construction or `reset()` is ignored: there is nothing to move yet.
+  touch_result touch(const tactile_frame& frame, const odometry& moved) {
+    check_finite(moved.dx_mm, moved.dy_mm, 0.0, "touch");
+    if (pose_)
+      detail::fail("localizer::touch: odometry (", moved.dx_mm, ", ", moved.dy_mm,
+                   ") mm is in the map's frame, but this localizer does not know the heading "
+                   "(headings = ",
+                   config_.headings,
+                   "); give the motion in the sensor's frame (sensor_odometry) or the arm's pose "
+                   "(touch_at)");
+    return step(frame, sensor_odometry{.du_mm = moved.dx_mm, .dv_mm = moved.dy_mm});
+  }
+
+  /// A touch after the sensor moved by `moved` in its own frame (u along its columns, v along
+  /// its rows, mm) and turned by `moved.dtheta_rad`. With a known heading the sensor's frame is
+  /// the map's and the turn must be 0.
+  touch_result touch(const tactile_frame& frame, const sensor_odometry& moved) {
+    check_finite(moved.du_mm, moved.dv_mm, moved.dtheta_rad, "touch");
+    if (planar_ && moved.dtheta_rad != 0.0)
+      detail::fail("localizer::touch: the sensor turned by ", moved.dtheta_rad,
+                   " rad, but this localizer assumes a known, fixed heading (headings = 0); "
+                   "set localizer_config::headings (e.g. 36) to localize the heading too");
+    return step(frame, moved);
+  }
+
+  /// A touch with the arm's pose (its own frame, see `arm_pose`): the motion since the previous
+  /// `touch_at` becomes the odometry. With a known heading the yaw may not change by more than
+  /// 5 degrees between touches (a turned sensor breaks the planar model).
+  touch_result touch_at(const tactile_frame& frame, const arm_pose& where) {
+    check_finite(where.x_mm, where.y_mm, where.theta_rad, "touch_at");
+    std::optional<sensor_odometry> moved;
+    if (last_pose_) {
+      const double dx = where.x_mm - last_pose_->x_mm, dy = where.y_mm - last_pose_->y_mm;
+      const double turn = pose_grid<float>::wrap_angle(where.theta_rad - last_pose_->theta_rad);
+      if (planar_) {
+        if (std::abs(turn) > 5.0 * std::numbers::pi / 180.0)
+          detail::fail("localizer::touch_at: the arm's yaw changed by ",
+                       turn * 180.0 / std::numbers::pi,
+                       " degrees since the previous touch, but this localizer assumes a known, "
+                       "fixed heading (headings = 0); set localizer_config::headings (e.g. 36) "
+                       "to localize the heading too");
+        moved = sensor_odometry{.du_mm = dx, .dv_mm = dy};
+      } else {
+        // The motion in the sensor's frame at the previous touch: R(-theta) (dx, dy).
+        const double c = std::cos(last_pose_->theta_rad), s = std::sin(last_pose_->theta_rad);
+        moved = sensor_odometry{
+            .du_mm = c * dx + s * dy, .dv_mm = -s * dx + c * dy, .dtheta_rad = turn};
+      }
+    }
+    touch_result r = step(frame, moved);
+    last_pose_ = where;
+    return r;
+  }
+
+  /// Starts a new exploration on the same map: a uniform belief, no previous pose.
+  void reset() {
+    if (planar_) planar_->reset();
+    if (pose_) pose_->reset();
+    calls_ = 0;
+    touches_ = 0;
+    last_pose_.reset();
+  }
+
+  /// The belief over positions (summed over headings and appearances): one value per position
+  /// of the sensor's centre, `positions().rows() x positions().cols()`; the position of element
+  /// (r, c) is `positions().state_mm(r * cols + c)`.
+  [[nodiscard]] image<float> belief() const {
+    return planar_ ? position_belief(*planar_) : position_belief(*pose_);
+  }
+  /// Unknown heading: the belief per heading (summed over appearances), one image per heading
+  /// `heading_rad(k)`. Known heading: one image, `belief()`.
+  [[nodiscard]] std::vector<image<float>> heading_belief() const {
+    if (planar_) return {belief()};
+    const auto& g = pose_->grid();
+    const auto marginal = marginal_belief(g, pose_->belief());
+    const Eigen::Index plane = g.rows() * g.cols();
+    std::vector<image<float>> out;
+    for (Eigen::Index k = 0; k < config_.headings; ++k)
+      out.emplace_back(
+          Eigen::Map<const image<float>>(marginal.data() + k * plane, g.rows(), g.cols()));
+    return out;
+  }
+  /// The heading of layer k of `heading_belief()` (radians, map frame).
+  [[nodiscard]] double heading_rad(Eigen::Index k) const {
+    if (planar_) return 0.0;
+    TACMAP_ASSERT(k >= 0 && k < config_.headings, "heading_rad: layer out of range");
+    return pose_->grid().base().heading(k);
+  }
+
+  /// The sensor centre's candidate positions (the grid of `belief()`).
+  [[nodiscard]] const planar_grid<float>& positions() const { return positions_grid(); }
+  [[nodiscard]] const image<float>& map() const { return map_; }
+  [[nodiscard]] double mm_per_px() const { return mm_per_px_; }
+  [[nodiscard]] const taxel_geometry& sensor() const { return sensor_; }
+  /// The sensor's footprint on the map, px.
+  [[nodiscard]] pixel_size window() const { return window_; }
+  /// The configuration, with `preprocessing.mm_per_px` set to the map's scale.
+  [[nodiscard]] const localizer_config& config() const { return config_; }
+  /// Touches used (accepted frames) since construction or `reset()`.
+  [[nodiscard]] std::size_t touches() const { return touches_; }
+  /// The underlying filter, for what the localizer does not expose: the planar one (nullptr
+  /// when the heading is unknown) and the (x, y, theta) one (nullptr when it is known).
+  [[nodiscard]] const planar_localizer_filter* planar_filter() const {
+    return planar_ ? &*planar_ : nullptr;
+  }
+  [[nodiscard]] const pose_localizer_filter* pose_filter() const {
+    return pose_ ? &*pose_ : nullptr;
+  }
+
+ private:
+  touch_result step(const tactile_frame& frame, const std::optional<sensor_odometry>& moved) {
+    if (frame.geometry != sensor_)
+      detail::fail("localizer::touch: the frame is ", frame.geometry.rows, " x ",
+                   frame.geometry.cols, " taxels at ", frame.geometry.pitch_mm,
+                   " mm, but this localizer was built for ", sensor_.rows, " x ", sensor_.cols,
+                   " at ", sensor_.pitch_mm,
+                   " mm (the footprint on the map depends on it); build the localizer with the "
+                   "frame's geometry");
+    // Preprocess first: a malformed frame throws before anything changes.
+    const preprocessed_frame pre = preprocess(frame, config_.preprocessing);
+    touch_result r;
+    if (planar_)
+      run(*planar_, pre, moved, r);
+    else
+      run(*pose_, pre, moved, r);
+    ++calls_;
+    return r;
+  }
+
+  template <class Filter>
+  void run(Filter& filter, const preprocessed_frame& pre,
+           const std::optional<sensor_odometry>& moved, touch_result& r) {
+    constexpr bool pose = Filter::grid_type::dimension == 3;
+    if (calls_ > 0 && moved) {
+      try {
+        if constexpr (pose)
+          filter.predict(*moved);
+        else
+          filter.predict(odometry{.dx_mm = moved->du_mm, .dy_mm = moved->dv_mm});
+      } catch (const std::domain_error&) {
+        // The motion carried every state the belief allowed off the map (possible without the
+        // motion floor, lost_probability = 0): start again, as a user would.
+        filter.reset();
+        r.restarted = true;
+      }
+    }
+    r.rejection = pre.rejection;
+    std::optional<update_report> report;
+    if (pre.accepted()) {
+      try {
+        report = filter.update(pre.pixels);
+      } catch (const std::domain_error&) {
+        // The touch ruled out every state the belief still allowed (possible without the
+        // floor). From a uniform belief it cannot (unless the model itself failed: rethrown).
+        if (touches_ == 0 && !r.restarted) throw;
+        filter.reset();
+        r.restarted = true;
+        report = filter.update(pre.pixels);
+        report->log_prediction_support = -std::numeric_limits<double>::infinity();
+      }
+      ++touches_;
+    }
+    const auto est = filter.estimate();
+    const confidence conf = report ? assess(filter, est, *report, config_.confidence)
+                                   : assess(filter, est, config_.confidence);
+    r.verdict = pre.accepted() ? conf.verdict : verdict::rejected_frame;
+    r.position_mm = conf.centre_mm;
+    r.probability_within = conf.probability_within;
+    r.heading_probability = conf.heading_probability;
+    r.most_probable_mm = est.map_mm.template head<2>();
+    r.covariance_mm2 = est.covariance_mm2.template topLeftCorner<2, 2>();
+    if constexpr (pose) r.heading_rad = est.map_mm(2);
+    r.entropy_nats = est.entropy_nats;
+    r.appearance_probability = est.hypothesis_probability;
+    if (report) {
+      r.log_prediction_support = report->log_prediction_support;
+      r.log_marginal_likelihood = report->log_marginal_likelihood();
+    }
+    r.touches = touches_;
+  }
+
+  [[nodiscard]] const planar_grid<float>& positions_grid() const {
+    if (planar_) return planar_->grid().base();
+    return pose_->grid().base().positions();
+  }
+
+  static void check_finite(double a, double b, double c, const char* where) {
+    if (!(std::isfinite(a) && std::isfinite(b) && std::isfinite(c)))
+      detail::fail("localizer::", where, ": the motion or pose (", a, ", ", b, ", ", c,
+                   ") is not finite; expected finite millimetres and radians — the position "
+                   "source delivered an invalid sample");
+  }
+
+  static image<float> checked_map(image<float> map, double mm_per_px) {
+    if (map.size() == 0)
+      detail::fail(
+          "localizer: the map is empty; expected an image of the object (e.g. "
+          "tacmap::load_image)");
+    if (!map.allFinite())
+      detail::fail("localizer: the map has non-finite pixels; expected finite intensities");
+    if (!(std::isfinite(mm_per_px) && mm_per_px > 0.0))
+      detail::fail("localizer: mm_per_px = ", mm_per_px,
+                   "; expected the map's scale, a finite value > 0 millimetres per pixel");
+    return map;
+  }
+
+  static pixel_size checked_window(const image<float>& map, double mm_per_px,
+                                   const taxel_geometry& sensor) {
+    const pixel_size w = tactile_window(sensor, mm_per_px);
+    if (w.width < 1 || w.height < 1)
+      detail::fail("localizer: a ", sensor.rows, " x ", sensor.cols, " array at ", sensor.pitch_mm,
+                   " mm covers less than one pixel at ", mm_per_px,
+                   " mm per px; expected a map scale finer than the array's pitch");
+    if (map.cols() < w.width || map.rows() < w.height)
+      detail::fail("localizer: the map is ", map.cols(), " x ", map.rows(),
+                   " px (width x height) but the sensor covers ", w.width, " x ", w.height,
+                   " px at ", mm_per_px, " mm per px; expected a map at least the sensor's size");
+    return w;
+  }
+
+  image<float> map_;
+  double mm_per_px_;
+  localizer_config config_;
+  taxel_geometry sensor_;
+  pixel_size window_;
+  std::optional<planar_localizer_filter> planar_;
+  std::optional<pose_localizer_filter> pose_;
+  std::size_t calls_ = 0;
+  std::size_t touches_ = 0;
+  std::optional<arm_pose> last_pose_;
+};
+
+}  // namespace tacmap

@@ -1,0 +1,241 @@
+// tacmap::localizer: one object from raw frames and odometry to an estimate and a verdict.
+// Frames come from the tactile simulator pressing the bundled gecko's relief.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "sim/gecko_protocol.hpp"
+#include "tacmap/localizer.hpp"
+#include "tacmap/sim/tactile_simulator.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+using tacmap_test::gecko;
+
+tacmap::tactile_simulator gecko_simulator(std::uint64_t seed) {
+  const auto& p = gecko();
+  return tacmap::tactile_simulator(p.relief_mm(), p.map_size(), p.mm_per_px, {.seed = seed});
+}
+
+// A fast configuration for the tests that are not about accuracy: SIFT-lite on the shared
+// dense field (milliseconds to prepare, even unoptimised).
+tacmap::localizer_config fast_config() {
+  tacmap::localizer_config c;
+  c.model = tacmap::measurement_kind::lite;
+  c.features = tacmap::window_features::shared_dense;
+  return c;
+}
+
+tacmap::tactile_frame empty_frame() {
+  tacmap::tactile_frame f;
+  f.counts.setZero();
+  return f;
+}
+
+}  // namespace
+
+TEST_CASE("a localizer with its defaults localizes the gecko from raw frames and says so") {
+  const auto& p = gecko();
+  tacmap::localizer loc(p.map, p.mm_per_px);
+  CHECK(loc.positions().rows() * loc.positions().cols() > 1000);
+  std::size_t localized_sequences = 0;
+  for (std::size_t q = 0; q < 3; ++q) {
+    CAPTURE(q);
+    loc.reset();
+    auto sim = gecko_simulator(100 + q);
+    tacmap::touch_result r;
+    double error_mm = 0.0;
+    for (std::size_t t = 0; t < p.sequences[q].size(); ++t) {
+      const auto& step = p.sequences[q][t];
+      const auto& truth = p.locations[step.location];
+      const auto frame = sim.render(truth.pose());
+      r = t == 0 ? loc.touch(frame) : loc.touch(frame, step.measured_motion);
+      CHECK(r.accepted());
+      CHECK(r.touches == t + 1);
+      error_mm = (r.position_mm - Eigen::Vector2d(truth.x_mm, truth.y_mm)).norm();
+      // The belief is a distribution over the grid's positions.
+      const auto b = loc.belief();
+      CHECK(b.rows() == loc.positions().rows());
+      CHECK(static_cast<double>(b.sum()) == doctest::Approx(1.0).epsilon(1e-4));
+      CHECK(r.probability_within >= 0.0);
+      CHECK(r.probability_within <= 1.0 + 1e-9);
+      CHECK(r.appearance_probability.size() == 2);  // latent appearance by default
+    }
+    CHECK(error_mm < 5.0);
+    if (r.verdict == tacmap::verdict::localized) ++localized_sequences;
+    // The gecko's raised parts are bright in its map: "as photographed" wins.
+    CHECK(r.appearance_probability[0] > 0.9);
+  }
+  CHECK(localized_sequences >= 2);
+}
+
+TEST_CASE("a rejected frame is reported, and the arm's motion before it still applies") {
+  const auto& p = gecko();
+  const auto config = fast_config();
+  tacmap::localizer loc(p.map, p.mm_per_px, config);
+  auto reference = tacmap::make_planar_filter(loc.config(), p.map, p.mm_per_px, loc.window());
+  auto sim = gecko_simulator(7);
+  const auto frame = sim.render(p.locations[0].pose());
+  const auto first = loc.touch(frame);
+  reference.update(tacmap::preprocess(frame, loc.config().preprocessing).pixels);
+  const tacmap::odometry moved{.dx_mm = 3.0, .dy_mm = -2.0};
+  const auto r = loc.touch(empty_frame(), moved);
+  reference.predict(moved);
+  CHECK(r.verdict == tacmap::verdict::rejected_frame);
+  CHECK(r.rejection == tacmap::frame_rejection::weak_peak);
+  CHECK_FALSE(r.accepted());
+  CHECK(r.touches == 1);
+  CHECK(loc.touches() == 1);
+  CHECK(r.log_prediction_support == 0.0);
+  REQUIRE(loc.planar_filter() != nullptr);
+  CHECK((loc.planar_filter()->belief() - reference.belief()).abs().maxCoeff() == 0.0F);
+  CHECK(first.touches == 1);
+}
+
+TEST_CASE("touch_at turns the arm's poses into the same odometry as touch") {
+  const auto& p = gecko();
+  tacmap::localizer by_motion(p.map, p.mm_per_px, fast_config());
+  tacmap::localizer by_pose(p.map, p.mm_per_px, fast_config());
+  auto sim = gecko_simulator(3);
+  const auto& seq = p.sequences[1];
+  tacmap::arm_pose arm{.x_mm = 500.0, .y_mm = -20.0, .theta_rad = 0.01};  // any origin
+  for (std::size_t t = 0; t < seq.size(); ++t) {
+    const auto frame = sim.render(p.locations[seq[t].location].pose());
+    if (t > 0) {
+      arm.x_mm += seq[t].measured_motion.dx_mm;
+      arm.y_mm += seq[t].measured_motion.dy_mm;
+    }
+    const auto a = t == 0 ? by_motion.touch(frame) : by_motion.touch(frame, seq[t].measured_motion);
+    const auto b = by_pose.touch_at(frame, arm);
+    CHECK((a.position_mm - b.position_mm).norm() < 1e-9);
+    CHECK(a.probability_within == doctest::Approx(b.probability_within).epsilon(1e-6));
+  }
+  CHECK((by_motion.belief() - by_pose.belief()).abs().maxCoeff() < 1e-6F);
+  // A turned sensor breaks the known-heading model: refused, naming the turn.
+  const auto frame = sim.render(p.locations[0].pose());
+  arm.theta_rad += 0.5;
+  CHECK_THROWS_WITH_AS(by_pose.touch_at(frame, arm), doctest::Contains("headings"),
+                       std::invalid_argument);
+}
+
+TEST_CASE("with unknown heading only motion relative to the sensor counts: any arm frame") {
+  const auto& p = gecko();
+  auto config = fast_config();
+  config.headings = 4;
+  tacmap::localizer a(p.map, p.mm_per_px, config);
+  tacmap::localizer b(p.map, p.mm_per_px, config);
+  CHECK(a.planar_filter() == nullptr);
+  REQUIRE(a.pose_filter() != nullptr);
+  CHECK(a.heading_belief().size() == 4);
+  CHECK(a.heading_rad(1) == doctest::Approx(std::numbers::pi / 2));
+  auto sim = gecko_simulator(5);
+  const auto& seq = p.sequences[2];
+  // Frame A: the map's axes, sensor heading 0. Frame B: turned by 0.7 rad and shifted.
+  const double phi = 0.7, c = std::cos(phi), s = std::sin(phi);
+  double x = 0.0, y = 0.0;
+  for (std::size_t t = 0; t < std::min<std::size_t>(seq.size(), 4); ++t) {
+    const auto frame = sim.render(p.locations[seq[t].location].pose());
+    if (t > 0) {
+      x += seq[t].measured_motion.dx_mm;
+      y += seq[t].measured_motion.dy_mm;
+    }
+    const auto ra = a.touch_at(frame, {.x_mm = x, .y_mm = y, .theta_rad = 0.0});
+    const auto rb = b.touch_at(
+        frame, {.x_mm = 40.0 + c * x - s * y, .y_mm = -7.0 + s * x + c * y, .theta_rad = phi});
+    CHECK((ra.position_mm - rb.position_mm).norm() < 1e-6);
+  }
+  const auto ba = a.heading_belief(), bb = b.heading_belief();
+  for (std::size_t k = 0; k < ba.size(); ++k) CHECK((ba[k] - bb[k]).abs().maxCoeff() < 1e-5F);
+  // Map-frame odometry means nothing without the heading: refused.
+  const auto frame = sim.render(p.locations[0].pose());
+  CHECK_THROWS_WITH_AS(a.touch(frame, tacmap::odometry{.dx_mm = 1.0}),
+                       doctest::Contains("sensor's frame"), std::invalid_argument);
+}
+
+TEST_CASE("a move off the map restarts the paper's configuration instead of failing") {
+  const auto& p = gecko();
+  auto config = tacmap::localizer_config::paper();
+  config.features = tacmap::window_features::shared_dense;  // fast to prepare
+  tacmap::localizer loc(p.map, p.mm_per_px, config);
+  auto sim = gecko_simulator(9);
+  const auto frame = sim.render(p.locations[0].pose());
+  CHECK_FALSE(loc.touch(frame).restarted);
+  const auto r = loc.touch(frame, tacmap::odometry{.dx_mm = 1000.0, .dy_mm = 0.0});
+  CHECK(r.restarted);
+  CHECK(r.touches == 2);
+  CHECK(loc.belief().allFinite());
+  CHECK(static_cast<double>(loc.belief().sum()) == doctest::Approx(1.0).epsilon(1e-4));
+}
+
+TEST_CASE("a touch far from where the track put the sensor is contradicted") {
+  const auto& p = gecko();
+  tacmap::localizer loc(p.map, p.mm_per_px, fast_config());
+  auto sim = gecko_simulator(11);
+  const auto& seq = p.sequences[0];
+  tacmap::touch_result r;
+  for (std::size_t t = 0; t < seq.size(); ++t) {
+    const auto frame = sim.render(p.locations[seq[t].location].pose());
+    r = t == 0 ? loc.touch(frame) : loc.touch(frame, seq[t].measured_motion);
+  }
+  REQUIRE(r.verdict == tacmap::verdict::localized);
+  // Kidnapped: the next touches are at the location farthest from the last one, and the arm
+  // reports no motion.
+  const auto& last = p.locations[seq.back().location];
+  std::size_t far = 0;
+  double farthest = 0.0;
+  for (std::size_t i = 0; i < p.locations.size(); ++i) {
+    const double d = std::hypot(p.locations[i].x_mm - last.x_mm, p.locations[i].y_mm - last.y_mm);
+    if (d > farthest) farthest = d, far = i;
+  }
+  REQUIRE(farthest > 20.0);
+  bool contradicted = false;
+  for (int t = 0; t < 3 && !contradicted; ++t) {
+    r = loc.touch(sim.render(p.locations[far].pose()), tacmap::odometry{});
+    contradicted = r.verdict == tacmap::verdict::contradicted;
+    CHECK(r.verdict != tacmap::verdict::localized);  // never a confident wrong answer
+  }
+  CHECK(contradicted);
+  CHECK(r.log_prediction_support < loc.config().confidence.contradiction);
+}
+
+TEST_CASE("a localizer refuses bad input with messages that say what to do") {
+  const auto& p = gecko();
+  CHECK_THROWS_WITH_AS(tacmap::localizer(tacmap::image<float>(), 1.0),
+                       doctest::Contains("map is empty"), std::invalid_argument);
+  CHECK_THROWS_WITH_AS(tacmap::localizer(p.map, -1.0), doctest::Contains("mm_per_px = -1"),
+                       std::invalid_argument);
+  CHECK_THROWS_WITH_AS(tacmap::localizer(tacmap::image<float>::Zero(10, 10), p.mm_per_px),
+                       doctest::Contains("at least the sensor's size"), std::invalid_argument);
+  tacmap::image<float> nan_map = p.map;
+  nan_map(3, 4) = std::numeric_limits<float>::quiet_NaN();
+  CHECK_THROWS_WITH_AS(tacmap::localizer(nan_map, p.mm_per_px), doctest::Contains("non-finite"),
+                       std::invalid_argument);
+  auto bad = fast_config();
+  bad.motion_sigma_mm = 0.0;
+  CHECK_THROWS_WITH_AS(tacmap::localizer(p.map, p.mm_per_px, bad),
+                       doctest::Contains("motion_sigma_mm = 0"), std::invalid_argument);
+
+  tacmap::localizer loc(p.map, p.mm_per_px, fast_config());
+  tacmap::tactile_frame other;
+  other.geometry = {.rows = 4, .cols = 4, .pitch_mm = 3.4};
+  other.counts = tacmap::image<float>::Constant(4, 4, 500.0F);
+  CHECK_THROWS_WITH_AS(loc.touch(other), doctest::Contains("built for 14 x 6"),
+                       std::invalid_argument);
+  auto sim = gecko_simulator(1);
+  const auto frame = sim.render(p.locations[0].pose());
+  CHECK_THROWS_WITH_AS(
+      loc.touch(frame, tacmap::odometry{.dx_mm = std::numeric_limits<double>::quiet_NaN()}),
+      doctest::Contains("not finite"), std::invalid_argument);
+  CHECK_THROWS_WITH_AS(loc.touch(frame, tacmap::sensor_odometry{.dtheta_rad = 0.2}),
+                       doctest::Contains("turned by 0.2"), std::invalid_argument);
+  // Nothing above changed the belief: still uniform, no touch.
+  CHECK(loc.touches() == 0);
+  const auto b = loc.belief();
+  CHECK(b.maxCoeff() == doctest::Approx(b.minCoeff()));
+}
