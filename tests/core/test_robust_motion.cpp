@@ -3,6 +3,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "table_filter.hpp"
 #include "tacmap/motion/robust_motion.hpp"
@@ -86,4 +87,61 @@ TEST_CASE("robust_motion: the wide component adds w r (r + 1) px^2 of variance p
           tacmap::robust_motion<tacmap::odometry_gaussian>(
               base, {.lost_probability = 0.5, .wide_probability = 0.6});
         }).find("wide_probability = 0.6 (with lost_probability 0.5)") != std::string::npos);
+}
+
+TEST_CASE("robust_motion: the wide blur equals a direct 2-D convolution with three boxes") {
+  // A non-square grid (rows != cols, different radii per axis) with mass near every edge, so
+  // the dropped-at-the-border mass and the transposed pass are both exercised.
+  const tacmap_test::table_grid grid({.width = 26, .height = 17}, 1.0, {.width = 3, .height = 3});
+  const Eigen::Index rows = grid.rows(), cols = grid.cols();
+  tacmap::belief_array<tacmap_test::table_grid> in(grid.size());
+  for (Eigen::Index i = 0; i < in.size(); ++i)
+    in(i) = 1.0F + static_cast<float>((i * 37) % 11) + (i % cols == 0 ? 30.0F : 0.0F);
+  in /= in.sum();
+  // No motion noise to speak of: base = identity up to float rounding.
+  struct identity {
+    using control_type = tacmap::odometry;
+    tacmap::prediction_report predict(const tacmap_test::table_grid&,
+                                      const tacmap::belief_array<tacmap_test::table_grid>& a,
+                                      tacmap::belief_array<tacmap_test::table_grid>& b,
+                                      const control_type&) const {
+      b = a;
+      return {};
+    }
+  };
+  const double w = 0.3;
+  const tacmap::robust_motion<identity> wide({}, {.wide_probability = w, .wide_sigma_mm = 2.0});
+  tacmap::belief_array<tacmap_test::table_grid> got(grid.size());
+  wide.predict(grid, in, got, {});
+  // Reference: three passes of a box of radius 2 (sigma 2 mm -> r = 2) along each axis, each
+  // a direct sum over the window with zero outside (mass blurred off the grid is gone).
+  std::vector<double> blurred(static_cast<std::size_t>(in.size()));
+  for (Eigen::Index i = 0; i < in.size(); ++i)
+    blurred[static_cast<std::size_t>(i)] = static_cast<double>(in(i));
+  const auto at = [&](Eigen::Index r, Eigen::Index c) -> double& {
+    return blurred[static_cast<std::size_t>(r * cols + c)];
+  };
+  for (const bool along_rows : {true, false})
+    for (int pass = 0; pass < 3; ++pass) {
+      const std::vector<double> before = blurred;
+      for (Eigen::Index r = 0; r < rows; ++r)
+        for (Eigen::Index c = 0; c < cols; ++c) {
+          double sum = 0.0;
+          for (Eigen::Index d = -2; d <= 2; ++d) {
+            const Eigen::Index rr = along_rows ? r : r + d, cc = along_rows ? c + d : c;
+            if (rr >= 0 && rr < rows && cc >= 0 && cc < cols)
+              sum += before[static_cast<std::size_t>(rr * cols + cc)];
+          }
+          at(r, c) = sum / 5.0;
+        }
+    }
+  std::vector<double> want(static_cast<std::size_t>(in.size()));
+  for (Eigen::Index i = 0; i < in.size(); ++i)
+    want[static_cast<std::size_t>(i)] =
+        (1 - w) * static_cast<double>(in(i)) + w * blurred[static_cast<std::size_t>(i)];
+  double total = 0.0;
+  for (const double v : want) total += v;
+  for (Eigen::Index i = 0; i < in.size(); ++i)
+    CHECK(static_cast<double>(got(i)) ==
+          doctest::Approx(want[static_cast<std::size_t>(i)] / total).epsilon(1e-5));
 }

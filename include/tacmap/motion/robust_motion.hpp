@@ -20,6 +20,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <utility>
+#include <vector>
 
 #include "tacmap/config.hpp"
 #include "tacmap/grid/concept.hpp"
@@ -89,18 +90,23 @@ class robust_motion {
       // out = (1 - w) out + w blur(out), the blur a Gaussian of wide_sigma_mm made of three
       // box passes per axis (variance r (r + 1) px^2 for radius r) over every rows x cols
       // plane; mass blurred off a plane's edge is dropped and the rest renormalised, as the
-      // base model does with mass moved off the grid.
-      wide_ = out.template cast<double>();
+      // base model does with mass moved off the grid. Sliding sums in double, whole rows at a
+      // time (vectorised); the plane is transposed once so both axes run that way.
       const Eigen::Index rows = grid.rows(), cols = grid.cols(), plane = rows * cols;
       const double pitch_x = cols > 1 ? std::abs(grid.state_mm(1)(0) - grid.state_mm(0)(0)) : 1.0;
       const double pitch_y =
           rows > 1 ? std::abs(grid.state_mm(cols)(1) - grid.state_mm(0)(1)) : 1.0;
+      const Eigen::Index rx = box_radius(params_.wide_sigma_mm / pitch_x);
+      const Eigen::Index ry = box_radius(params_.wide_sigma_mm / pitch_y);
+      const auto keep = static_cast<scalar>(1.0 - w);
       for (Eigen::Index at = 0; at < out.size(); at += plane) {
-        Eigen::Map<image<double>> img(wide_.data() + at, rows, cols);
-        box_blur_rows(img, box_radius(params_.wide_sigma_mm / pitch_x));
-        box_blur_cols(img, box_radius(params_.wide_sigma_mm / pitch_y));
+        Eigen::Map<image<scalar>> img(out.data() + at, rows, cols);
+        down_ = img.template cast<double>();
+        box3_down(down_, scratch_, ry);  // along y
+        across_ = down_.transpose();
+        box3_down(across_, scratch_, rx);  // along x
+        img = img * keep + (across_.transpose() * w).template cast<scalar>();
       }
-      out = out * static_cast<scalar>(1.0 - w) + (wide_ * w).template cast<scalar>();
       out /= out.sum();
     }
     if (lambda > 0.0)
@@ -121,50 +127,49 @@ class robust_motion {
                std::lround(0.5 * (std::sqrt(1.0 + 4.0 * sigma_px * sigma_px) - 1.0))));
   }
 
-  // Three box passes of radius r along each row (zero outside).
-  template <class Img>
-  void box_blur_rows(Img& img, Eigen::Index r) const {
-    using scalar = typename Img::Scalar;
-    const Eigen::Index cols = img.cols();
-    line_.resize(cols + 1);
-    const auto norm = static_cast<scalar>(1.0 / static_cast<double>(2 * r + 1));
-    for (int pass = 0; pass < 3; ++pass)
-      for (Eigen::Index row = 0; row < img.rows(); ++row) {
-        line_(0) = 0;
-        for (Eigen::Index c = 0; c < cols; ++c)
-          line_(c + 1) = line_(c) + static_cast<double>(img(row, c));
-        for (Eigen::Index c = 0; c < cols; ++c)
-          img(row, c) = static_cast<scalar>(line_(std::min(cols, c + r + 1)) -
-                                            line_(std::max<Eigen::Index>(0, c - r))) *
-                        norm;
-      }
-  }
-
-  // Three box passes of radius r down each column: running sums of whole rows.
-  template <class Img>
-  void box_blur_cols(Img& img, Eigen::Index r) const {
-    using scalar = typename Img::Scalar;
-    const Eigen::Index rows = img.rows(), cols = img.cols();
-    prefix_.resize(rows + 1, cols);
+  // Three box passes of radius r down the columns of `a` (zero outside), `b` as scratch: each
+  // output row is the mean of the 2 r + 1 input rows around it, kept as a running sum of whole
+  // rows. Clamped at 0: the running sum's rounding must not make a state negative.
+  static void box3_down(image<double>& a, image<double>& b, Eigen::Index r) {
+    const Eigen::Index rows = a.rows(), cols = a.cols();
+    b.resize(rows, cols);
     const double norm = 1.0 / static_cast<double>(2 * r + 1);
+    std::vector<double> sum(static_cast<std::size_t>(cols));
+    double* s = sum.data();
+    // Plain loops over contiguous rows (the compiler vectorises them): rows are short (~100),
+    // and an Eigen expression per row costs more than its arithmetic.
     for (int pass = 0; pass < 3; ++pass) {
-      prefix_.row(0).setZero();
-      for (Eigen::Index row = 0; row < rows; ++row)
-        prefix_.row(row + 1) = prefix_.row(row) + img.row(row).template cast<double>();
-      for (Eigen::Index row = 0; row < rows; ++row)
-        img.row(row) = ((prefix_.row(std::min(rows, row + r + 1)) -
-                         prefix_.row(std::max<Eigen::Index>(0, row - r))) *
-                        norm)
-                           .template cast<scalar>();
+      std::fill(sum.begin(), sum.end(), 0.0);
+      for (Eigen::Index i = 0; i < std::min(r, rows); ++i) {
+        const double* in = a.data() + i * cols;
+        for (Eigen::Index c = 0; c < cols; ++c) s[c] += in[c];
+      }
+      for (Eigen::Index i = 0; i < rows; ++i) {
+        double* out = b.data() + i * cols;
+        const double* hi = i + r < rows ? a.data() + (i + r) * cols : nullptr;
+        const double* lo = i - r - 1 >= 0 ? a.data() + (i - r - 1) * cols : nullptr;
+        if (hi && lo) {  // the common case, one fused loop
+          for (Eigen::Index c = 0; c < cols; ++c) {
+            s[c] += hi[c] - lo[c];
+            out[c] = std::max(s[c] * norm, 0.0);
+          }
+          continue;
+        }
+        for (Eigen::Index c = 0; c < cols; ++c) {
+          if (hi) s[c] += hi[c];
+          if (lo) s[c] -= lo[c];
+          out[c] = std::max(s[c] * norm, 0.0);
+        }
+      }
+      a.swap(b);
     }
   }
 
   M base_;
   robust_motion_params params_;
-  // Scratch of the wide component (reused between predictions).
-  mutable Eigen::ArrayXd wide_;
-  mutable Eigen::ArrayXd line_;
-  mutable image<double> prefix_;
+  // Scratch of the wide component (reused between predictions): a plane, its transpose, and
+  // the passes' other buffer.
+  mutable image<double> down_, across_, scratch_;
 };
 
 }  // namespace tacmap
