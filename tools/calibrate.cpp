@@ -47,6 +47,8 @@ int main(int argc, char** argv) try {
   std::string model_name = "classic_sift", scenario_name = "realistic", curve_path;
   std::uint64_t seed = 101;
   long long sequences = 0;
+  long long map_px = tacmap_tools::default_map_px;  // signed: a negative size is refused
+  bool native = false;
   double tau_min = 0.01, tau_max = 10.0;
   double truth_radius = tacmap::tau_fit_params{}.truth_radius_mm;
   app.add_option("--photo", photos, "photograph(s) to use as maps (PNG/JPEG/PGM)")
@@ -59,6 +61,10 @@ int main(int argc, char** argv) try {
   app.add_option("--scenario", scenario_name, "ideal, realistic (default) or unknown");
   app.add_option("--seed", seed, "seeds the simulator and the photographs' protocols (101)");
   app.add_option("--sequences", sequences, "use the first N sequences of each map (0 = all)");
+  auto* map_px_option = app.add_option(
+      "--map-px", map_px, "side of the photographs' square maps, px (120; resized by area)");
+  app.add_flag("--native", native, "keep each photograph's own size as its map")
+      ->excludes(map_px_option);
   app.add_option("--tau-min", tau_min, "lower end of the search range")->check(CLI::PositiveNumber);
   app.add_option("--tau-max", tau_max, "upper end of the search range")->check(CLI::PositiveNumber);
   app.add_option("--truth-radius", truth_radius,
@@ -71,6 +77,7 @@ int main(int argc, char** argv) try {
     throw CLI::ValidationError("--sequences", std::to_string(sequences) +
                                                   " is not a number of sequences; expected N >= 0 "
                                                   "(the first N of each map; 0 = all)");
+  if (!native) tacmap_tools::check_map_px(map_px);
   if (photos.empty() && protocols.empty())
     throw CLI::ValidationError("maps",
                                "no map given; expected --photo FILE or --protocol FOLDER (at "
@@ -106,8 +113,9 @@ int main(int argc, char** argv) try {
                     tacmap::load_protocol(std::filesystem::path(dir) / "protocol.txt")});
   for (std::size_t i = 0; i < photos.size(); ++i) {
     std::uint64_t s = seed + 0x9E3779B97F4A7C15ULL * (i + 1);
-    maps.push_back({std::filesystem::path(photos[i]).stem().string(),
-                    tacmap_tools::photo_protocol(photos[i], tacmap::splitmix64(s))});
+    maps.push_back(
+        {std::filesystem::path(photos[i]).stem().string(),
+         tacmap_tools::photo_protocol(photos[i], tacmap::splitmix64(s), 7, native ? 0 : map_px)});
   }
 
   using filter_type = tacmap::localization_experiment::filter_type;

@@ -7,8 +7,9 @@
 // staying below), median touches to localize, median final error.
 //
 // Maps: the bundled gecko with its protocol (--gecko, on by default), and photographs (--photo,
-// any PNG/JPEG/PGM stb_image reads): each is turned grey, area-resized to 120 x 120 px at the
-// paper's 3.4/3 mm per px, pressed as a continuous relief (height = 4 mm x intensity) and given a
+// PNG, JPEG or binary PGM): each is turned grey, area-resized to 120 x 120 px (--map-px N; or
+// kept at its own size, --native; either is reported on stderr) at the paper's 3.4/3 mm per px,
+// pressed as a continuous relief (height = 4 mm x intensity) and given a
 // generated protocol — 7 random touch locations, 22 random orders, odometry noise 0.5 mm per
 // axis — all fixed by --seed. Everything (simulator noise included) is reproducible from --seed.
 //
@@ -91,6 +92,9 @@ struct confidence_tally {
   std::vector<char> within_ok, heading_ok, appearance_ok;
   // Per touch number: touches with the estimate right (error < 5 mm), called localized, both.
   std::vector<std::size_t> right, said, said_and_right;
+  // The "contradicted" signal: touches right after an injected fault (an odometry outlier, a
+  // slip, a kidnap) and the other touches after the first, and how many of each it flagged.
+  std::size_t faulted = 0, faulted_flagged = 0, clean = 0, clean_flagged = 0;
 
   void add(const tacmap::sequence_result& run, bool pose) {
     constexpr double radius_mm = 5.0;
@@ -114,6 +118,11 @@ struct confidence_tally {
         right.resize(r.step + 1);
         said.resize(r.step + 1);
         said_and_right.resize(r.step + 1);
+      }
+      if (r.step > 0 && r.accepted) {
+        const bool fault = r.odometry_outlier || r.moved_unseen;
+        (fault ? faulted : clean) += 1;
+        (fault ? faulted_flagged : clean_flagged) += r.contradicted ? 1U : 0U;
       }
       const bool localized = r.verdict == tacmap::verdict::localized;
       right[r.step] += ok ? 1U : 0U;
@@ -145,8 +154,9 @@ void print_confidence(const std::map<std::string, confidence_tally>& tallies,
                       const std::vector<tacmap::localization_config>& configs) {
   std::printf(
       "\n| configuration | touches | ECE P(error <= 5 mm), points | ECE heading | ECE "
-      "appearance | \"localized\": precision %% | recall %% at touch 1, 2, ... |\n"
-      "|---|---|---|---|---|---|---|\n");
+      "appearance | \"localized\": precision %% | recall %% at touch 1, 2, ... | "
+      "\"contradicted\" %%: at a fault / elsewhere |\n"
+      "|---|---|---|---|---|---|---|---|\n");
   for (const auto& config : configs) {
     const auto it = tallies.find(config.name());
     if (it == tallies.end()) continue;
@@ -158,11 +168,12 @@ void print_confidence(const std::map<std::string, confidence_tally>& tallies,
       said_right += t.said_and_right[k];
       recall += (k == 0 ? "" : ", ") + percent(t.said_and_right[k], t.right[k]);
     }
-    std::printf("| %s | %zu | %s | %s | %s | %s (%zu of %zu) | %s |\n", config.name().c_str(),
-                t.within.size(), ece_text(t.within, t.within_ok).c_str(),
+    std::printf("| %s | %zu | %s | %s | %s | %s (%zu of %zu) | %s | %s / %s |\n",
+                config.name().c_str(), t.within.size(), ece_text(t.within, t.within_ok).c_str(),
                 ece_text(t.heading, t.heading_ok).c_str(),
                 ece_text(t.appearance, t.appearance_ok).c_str(), percent(said_right, said).c_str(),
-                said_right, said, recall.c_str());
+                said_right, said, recall.c_str(), percent(t.faulted_flagged, t.faulted).c_str(),
+                percent(t.clean_flagged, t.clean).c_str());
   }
 }
 
@@ -259,6 +270,8 @@ int main(int argc, char** argv) try {
   // Exploration faults (sim/faults.hpp).
   tacmap::exploration_faults faults;
   std::size_t photo_touches = 7;
+  long long map_px = tacmap_tools::default_map_px;  // signed: a negative size is refused
+  bool native = false;
   double odometry_noise = -1.0;
   app.add_option("--outliers", faults.outlier_probability,
                  "fault: probability that a move's odometry is off by --outlier-size")
@@ -293,6 +306,10 @@ int main(int argc, char** argv) try {
   app.add_option("--touches", photo_touches,
                  "touches per sequence of the photographs' protocols (7; the gecko's are fixed)")
       ->check(CLI::Range(1, 200));
+  auto* map_px_option = app.add_option(
+      "--map-px", map_px, "side of the photographs' square maps, px (120; resized by area)");
+  app.add_flag("--native", native, "keep each photograph's own size as its map")
+      ->excludes(map_px_option);
   app.add_option("--sequences", sequences, "run only the first N sequences of each map (0 = all)");
   app.add_option("--seed", seed, "seeds the simulator and the photographs' protocols");
   app.add_option("--tau", taus,
@@ -336,6 +353,7 @@ int main(int argc, char** argv) try {
                                                   " is not a number of sequences; expected N >= 0 "
                                                   "(the first N of each map; 0 = all)");
   max_sequences = static_cast<std::size_t>(sequences);
+  if (!native) tacmap_tools::check_map_px(map_px);
   if (odometry_noise >= 0.0) faults.odometry_sigma_mm = odometry_noise;
   try {
     faults.validate();
@@ -537,8 +555,9 @@ int main(int argc, char** argv) try {
         {"gecko", tacmap::load_protocol(std::filesystem::path(gecko_dir) / "protocol.txt")});
   for (std::size_t i = 0; i < photos.size(); ++i) {
     std::uint64_t s = seed + 0x9E3779B97F4A7C15ULL * (i + 1);
-    maps.push_back({std::filesystem::path(photos[i]).stem().string(),
-                    photo_protocol(photos[i], tacmap::splitmix64(s), photo_touches)});
+    maps.push_back(
+        {std::filesystem::path(photos[i]).stem().string(),
+         photo_protocol(photos[i], tacmap::splitmix64(s), photo_touches, native ? 0 : map_px)});
   }
   if (maps.empty()) throw CLI::ValidationError("maps", "no map: drop --no-gecko or give --photo");
 
@@ -549,7 +568,8 @@ int main(int argc, char** argv) try {
   csv << "map,config,model,pairing,shape,features,sequence,touch,location,true_x_mm,true_y_mm,"
          "map_x_mm,map_y_mm,error_mm,entropy_nats,accepted,localized,touches_to_localize,scenario,"
          "tau,headings,true_theta_rad,map_theta_rad,raised_dark,p_inverted,p_within_5mm,"
-         "p_heading,verdict,log_evidence,estimate_x_mm,estimate_y_mm,map_error_mm\n";
+         "p_heading,verdict,log_evidence,estimate_x_mm,estimate_y_mm,map_error_mm,"
+         "log_prediction_support,contradicted,fault\n";
 
   std::size_t total = 0;
   for (const auto& m : maps) {
@@ -615,7 +635,9 @@ int main(int argc, char** argv) try {
               << ',' << csv_number(r.probability_within) << ',' << csv_number(r.heading_probability)
               << ',' << tacmap::to_string(r.verdict) << ',' << csv_number(r.log_marginal_likelihood)
               << ',' << csv_number(r.estimate_x_mm) << ',' << csv_number(r.estimate_y_mm) << ','
-              << csv_number(r.map_error_mm) << '\n';
+              << csv_number(r.map_error_mm) << ',' << csv_number(r.log_prediction_support) << ','
+              << (r.contradicted ? 1 : 0) << ',' << (r.odometry_outlier || r.moved_unseen ? 1 : 0)
+              << '\n';
         confidence[config.name()].add(run, config.headings > 0);
         ++done;
         if (!quiet) progress(done, total, m.name + " " + config.name());

@@ -1,43 +1,19 @@
-// tacmap tools: photographs as maps — loading (stb_image), area resizing and the generated
-// touch protocol that tacmap-evaluate and tacmap-calibrate share. Include in ONE translation
-// unit per program (it defines stb_image's implementation).
+// tacmap tools: photographs as maps — loading (io/image_file.hpp), resizing to the map's size
+// and the generated touch protocol that tacmap-evaluate and tacmap-calibrate share.
 #pragma once
-
-#define STB_IMAGE_IMPLEMENTATION
-#define STBI_ONLY_PNG
-#define STBI_ONLY_JPEG
-#define STBI_ONLY_PNM
-#define STBI_NO_HDR
-#define STBI_NO_LINEAR
-#if defined(__GNUC__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wconversion"
-#pragma GCC diagnostic ignored "-Wsign-conversion"
-#pragma GCC diagnostic ignored "-Wold-style-cast"
-#pragma GCC diagnostic ignored "-Wshadow"
-#pragma GCC diagnostic ignored "-Wunused-function"
-#pragma GCC diagnostic ignored "-Wdouble-promotion"
-#pragma GCC diagnostic ignored "-Wcast-qual"
-#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
-#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
-#pragma GCC diagnostic ignored "-Wuseless-cast"
-#pragma GCC diagnostic ignored "-Wpedantic"
-#endif
-#include <stb/stb_image.h>
-#if defined(__GNUC__)
-#pragma GCC diagnostic pop
-#endif
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <memory>
+#include <cstdio>
+#include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/image.hpp"
+#include "tacmap/io/image_file.hpp"
 #include "tacmap/sim/protocol.hpp"
 #include "tacmap/sim/random.hpp"
 #include "tacmap/tactile/preprocess.hpp"
@@ -46,65 +22,69 @@ namespace tacmap_tools {
 
 using tacmap::image;
 
-// A photograph as grey intensities in [0, 1] (stb_image's own grey conversion).
-inline image<float> load_photo(const std::string& path) {
-  int w = 0, h = 0, channels = 0;
-  std::unique_ptr<unsigned char, void (*)(void*)> pixels(
-      stbi_load(path.c_str(), &w, &h, &channels, 1), stbi_image_free);
-  if (!pixels)
-    tacmap::detail::fail("cannot read the photograph '", path, "' (", stbi_failure_reason(),
-                         "); expected a readable PNG, JPEG or PGM file — check the path");
-  image<float> out(h, w);
-  for (Eigen::Index r = 0; r < h; ++r)
-    for (Eigen::Index c = 0; c < w; ++c)
-      out(r, c) = static_cast<float>(pixels.get()[r * w + c]) / 255.0F;
-  return out;
+/// The photographs' map scale: the paper's, 3 map px per 3.4 mm taxel.
+inline constexpr double photo_mm_per_px = 3.4 / 3.0;
+/// The default map size, in px per side: the paper's 120 x 120 px maps.
+inline constexpr long long default_map_px = 120;
+
+/// Checks --map-px: a square map must hold the sensor's window at photo_mm_per_px (42 x 18 px for
+/// the paper's array) and stay small enough to build its model (4096 px). Throws
+/// std::invalid_argument naming the option, the value and the range.
+inline void check_map_px(long long map_px) {
+  const tacmap::pixel_size window = tacmap::tactile_window({}, photo_mm_per_px);
+  const long long least = std::max(window.width, window.height);
+  if (map_px < least || map_px > 4096)
+    tacmap::detail::fail("--map-px: ", map_px, " is not a map size; expected ", least,
+                         " .. 4096 px per side (at least the sensor's ", window.width, " x ",
+                         window.height,
+                         " px (width x height) window at 3.4/3 mm per px), or --native to keep the "
+                         "photograph's own size");
 }
 
-// Area-average resize: each output pixel is the mean of the source area it covers (fractional
-// overlaps weighted), so shrinking a photograph does not alias.
-inline image<float> resize_area(const image<float>& src, Eigen::Index rows, Eigen::Index cols) {
-  const double sy = static_cast<double>(src.rows()) / static_cast<double>(rows);
-  const double sx = static_cast<double>(src.cols()) / static_cast<double>(cols);
-  // Weights of the source indices each output index covers, per axis.
-  const auto weights = [](Eigen::Index n_out, double scale, Eigen::Index n_src) {
-    std::vector<std::vector<std::pair<Eigen::Index, double>>> w(static_cast<std::size_t>(n_out));
-    for (Eigen::Index o = 0; o < n_out; ++o) {
-      const double a = static_cast<double>(o) * scale, b = a + scale;
-      for (auto s = static_cast<Eigen::Index>(std::floor(a));
-           s < n_src && static_cast<double>(s) < b; ++s) {
-        const double overlap =
-            std::min(b, static_cast<double>(s + 1)) - std::max(a, static_cast<double>(s));
-        if (overlap > 0) w[static_cast<std::size_t>(o)].push_back({s, overlap / scale});
-      }
-    }
-    return w;
-  };
-  const auto wy = weights(rows, sy, src.rows());
-  const auto wx = weights(cols, sx, src.cols());
-  image<float> out(rows, cols);
-  for (Eigen::Index r = 0; r < rows; ++r)
-    for (Eigen::Index c = 0; c < cols; ++c) {
-      double sum = 0, total = 0;
-      for (const auto& [y, a] : wy[static_cast<std::size_t>(r)])
-        for (const auto& [x, b] : wx[static_cast<std::size_t>(c)]) {
-          sum += a * b * src(y, x);
-          total += a * b;
-        }
-      out(r, c) = static_cast<float>(sum / total);
-    }
-  return out;
+/// A photograph as the map: grey intensities in [0, 1], resized by area to `map_px` x `map_px`
+/// (the aspect ratio is not kept), or at its own size when `map_px` is 0. Says on stderr what it
+/// did, so that nobody takes a resized map for the photograph's own.
+inline image<float> load_photo(const std::string& path, long long map_px) {
+  const image<float> photo = tacmap::load_image(std::filesystem::path(path));
+  const auto mm = [](Eigen::Index px) { return static_cast<double>(px) * photo_mm_per_px; };
+  if (map_px == 0) {
+    const tacmap::pixel_size window = tacmap::tactile_window({}, photo_mm_per_px);
+    if (photo.rows() < window.height || photo.cols() < window.width)
+      tacmap::detail::fail("photo '", path, "' is ", photo.cols(), " x ", photo.rows(),
+                           " px (width x height), smaller than the sensor's ", window.width, " x ",
+                           window.height,
+                           " px window at 3.4/3 mm per px; drop --native (or give --map-px N) "
+                           "to enlarge it");
+    std::fprintf(stderr,
+                 "photo '%s' is %ld x %ld px (width x height); kept at that size (--native) at "
+                 "%.4g mm per px: a %.0f x %.0f mm object\n",
+                 path.c_str(), static_cast<long>(photo.cols()), static_cast<long>(photo.rows()),
+                 photo_mm_per_px, mm(photo.cols()), mm(photo.rows()));
+    return photo;
+  }
+  check_map_px(map_px);
+  const auto side = static_cast<Eigen::Index>(map_px);
+  std::fprintf(stderr,
+               "photo '%s' is %ld x %ld px (width x height); %s to %ld x %ld px at %.4g mm per "
+               "px: a %.0f x %.0f mm object%s (--map-px N sets the size, --native keeps the "
+               "photograph's)\n",
+               path.c_str(), static_cast<long>(photo.cols()), static_cast<long>(photo.rows()),
+               photo.rows() == side && photo.cols() == side ? "used as is, already" : "resized",
+               static_cast<long>(side), static_cast<long>(side), photo_mm_per_px, mm(side),
+               mm(side), photo.rows() == photo.cols() ? "" : ", aspect ratio not kept");
+  return tacmap::resize_area(photo, side, side);
 }
 
-// A photograph's protocol: `touches` touch locations on pixel-aligned states, 22 random orders,
-// measured odometry = true motion + N(0, 0.5 mm) per axis (the gecko protocol's noise), from
-// `seed`.
+// A photograph's protocol: the map from `load_photo(path, map_px)`, `touches` touch locations on
+// pixel-aligned states, 22 random orders, measured odometry = true motion + N(0, 0.5 mm) per
+// axis (the gecko protocol's noise), from `seed`.
 inline tacmap::touch_protocol photo_protocol(const std::string& path, std::uint64_t seed,
-                                             std::size_t touches = 7) {
+                                             std::size_t touches = 7,
+                                             long long map_px = default_map_px) {
   tacmap::touch_protocol p;
   p.map_file = path;
-  p.map = resize_area(load_photo(path), 120, 120);
-  p.mm_per_px = 3.4 / 3.0;
+  p.map = load_photo(path, map_px);
+  p.mm_per_px = photo_mm_per_px;
   p.relief = {.kind = tacmap::relief_kind::continuous,
               .threshold = 0.5F,
               .height_mm = 4.0,
@@ -113,6 +93,12 @@ inline tacmap::touch_protocol photo_protocol(const std::string& path, std::uint6
   p.seed = seed;
   const tacmap::planar_grid<float> grid(p.map_size(), p.mm_per_px,
                                         tacmap::tactile_window({}, p.mm_per_px));
+  // Distinct locations are drawn until there are enough: a small map may not have that many.
+  if (static_cast<std::size_t>(grid.size()) < touches)
+    tacmap::detail::fail("photo '", path, "': a ", p.map.cols(), " x ", p.map.rows(),
+                         " px map has ", grid.size(), " sensor positions, fewer than the ", touches,
+                         " distinct touches asked for; expected a larger map (--map-px) "
+                         "or fewer --touches");
   tacmap::sim_rng rng(seed);
   while (p.locations.size() < touches) {  // distinct states
     const auto s = grid.state_mm(

@@ -6,10 +6,14 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "tacmap/config.hpp"
 
@@ -59,4 +63,112 @@ template <class Derived>
 }
 
 }  // namespace detail
+
+/// Area-average resize of `src` to `rows` x `cols`: each output pixel is the mean of the source
+/// area it covers, partly covered source pixels weighted by their overlap. Shrinking therefore
+/// does not alias, and the image's mean is kept. Enlarging with it repeats source pixels (blocky:
+/// each output pixel takes the source pixel it lies in, or the mean of the two or four it
+/// straddles); `rescale` interpolates instead. Throws std::invalid_argument for an empty source or
+/// a size that is not positive.
+[[nodiscard]] inline image<float> resize_area(const image<float>& src, Eigen::Index rows,
+                                              Eigen::Index cols) {
+  if (src.size() == 0)
+    detail::fail("resize_area: the source image is ", src.rows(), " x ", src.cols(),
+                 " px (rows x cols); expected a non-empty image");
+  if (rows < 1 || cols < 1)
+    detail::fail("resize_area: the requested size is ", rows, " x ", cols,
+                 " px (rows x cols); expected both >= 1");
+  const double sy = static_cast<double>(src.rows()) / static_cast<double>(rows);
+  const double sx = static_cast<double>(src.cols()) / static_cast<double>(cols);
+  // Per axis, the source indices each output index covers and their weights (overlap / extent):
+  // separable, so the 2-D weight is the product and the per-pixel loop stays small.
+  const auto weights = [](Eigen::Index n_out, double scale, Eigen::Index n_src) {
+    std::vector<std::vector<std::pair<Eigen::Index, double>>> w(static_cast<std::size_t>(n_out));
+    for (Eigen::Index o = 0; o < n_out; ++o) {
+      const double a = static_cast<double>(o) * scale;
+      const double b = a + scale;
+      for (auto s = static_cast<Eigen::Index>(std::floor(a));
+           s < n_src && static_cast<double>(s) < b; ++s) {
+        const double overlap =
+            std::min(b, static_cast<double>(s + 1)) - std::max(a, static_cast<double>(s));
+        if (overlap > 0) w[static_cast<std::size_t>(o)].emplace_back(s, overlap / scale);
+      }
+    }
+    return w;
+  };
+  const auto wy = weights(rows, sy, src.rows());
+  const auto wx = weights(cols, sx, src.cols());
+  image<float> out(rows, cols);
+  for (Eigen::Index r = 0; r < rows; ++r)
+    for (Eigen::Index c = 0; c < cols; ++c) {
+      double sum = 0;
+      double total = 0;
+      for (const auto& [y, a] : wy[static_cast<std::size_t>(r)])
+        for (const auto& [x, b] : wx[static_cast<std::size_t>(c)]) {
+          sum += a * b * static_cast<double>(src(y, x));
+          total += a * b;
+        }
+      // Dividing by the weights' own total (1 up to rounding) keeps a constant image exact.
+      out(r, c) = static_cast<float>(sum / total);
+    }
+  return out;
+}
+
+/// `src`, sampled at `from_mm_per_px`, resampled to `to_mm_per_px` so that it covers the same
+/// physical extent: each side becomes round(side x from / to) px (at least 1), so the scale is
+/// met to within half a pixel over the whole side. Shrinking (to > from) averages areas
+/// (`resize_area`: no aliasing, the mean is kept); enlarging (to < from) interpolates bilinearly
+/// between pixel centres, the border pixels extended (smooth, unlike `resize_area`'s blocks); the
+/// same scale returns a copy. Throws std::invalid_argument for an empty image, a scale that is
+/// not finite and > 0, or a result under 1 px or over 2^28 px.
+[[nodiscard]] inline image<float> rescale(const image<float>& src, double from_mm_per_px,
+                                          double to_mm_per_px) {
+  if (src.size() == 0)
+    detail::fail("rescale: the source image is ", src.rows(), " x ", src.cols(),
+                 " px (rows x cols); expected a non-empty image");
+  if (!(std::isfinite(from_mm_per_px) && from_mm_per_px > 0.0) ||
+      !(std::isfinite(to_mm_per_px) && to_mm_per_px > 0.0))
+    detail::fail(
+        "rescale: from ", from_mm_per_px, " to ", to_mm_per_px,
+        " mm per px; expected two finite scales > 0 (the image's own, then the wanted one)");
+  const double factor = from_mm_per_px / to_mm_per_px;
+  const double rows_out = std::round(static_cast<double>(src.rows()) * factor);
+  const double cols_out = std::round(static_cast<double>(src.cols()) * factor);
+  // A bound that a typo in a scale (mm for m) hits long before the memory does.
+  constexpr double max_pixels = 268435456.0;  // 2^28 floats = 1 GiB
+  if (rows_out < 1.0 || cols_out < 1.0 || rows_out * cols_out > max_pixels)
+    detail::fail("rescale: a ", src.rows(), " x ", src.cols(), " px image from ", from_mm_per_px,
+                 " to ", to_mm_per_px, " mm per px would be ", rows_out, " x ", cols_out,
+                 " px; expected 1 px to 2^28 px — check that both scales are in mm per px");
+  const auto rows = static_cast<Eigen::Index>(rows_out);
+  const auto cols = static_cast<Eigen::Index>(cols_out);
+  if (rows == src.rows() && cols == src.cols()) return src;
+  if (factor < 1.0) return resize_area(src, rows, cols);
+  // Bilinear: output pixel centres mapped onto source pixel centres over the same extent.
+  const double sy = static_cast<double>(src.rows()) / static_cast<double>(rows);
+  const double sx = static_cast<double>(src.cols()) / static_cast<double>(cols);
+  const auto last_row = static_cast<double>(src.rows() - 1);
+  const auto last_col = static_cast<double>(src.cols() - 1);
+  image<float> out(rows, cols);
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    const double v = std::clamp((static_cast<double>(r) + 0.5) * sy - 0.5, 0.0, last_row);
+    const auto r0 = static_cast<Eigen::Index>(std::floor(v));
+    const Eigen::Index r1 = std::min(r0 + 1, src.rows() - 1);
+    const double fy = v - static_cast<double>(r0);
+    for (Eigen::Index c = 0; c < cols; ++c) {
+      const double u = std::clamp((static_cast<double>(c) + 0.5) * sx - 0.5, 0.0, last_col);
+      const auto c0 = static_cast<Eigen::Index>(std::floor(u));
+      const Eigen::Index c1 = std::min(c0 + 1, src.cols() - 1);
+      const double fx = u - static_cast<double>(c0);
+      const auto at = [&](Eigen::Index y, Eigen::Index x) {
+        return static_cast<double>(src(y, x));
+      };
+      const double top = (1 - fx) * at(r0, c0) + fx * at(r0, c1);
+      const double bottom = (1 - fx) * at(r1, c0) + fx * at(r1, c1);
+      out(r, c) = static_cast<float>((1 - fy) * top + fy * bottom);
+    }
+  }
+  return out;
+}
+
 }  // namespace tacmap

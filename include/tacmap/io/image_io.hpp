@@ -1,11 +1,11 @@
 // tacmap: reading and writing grey-level images — binary PGM (read and write) and PNG (write).
 //
-// Why self-written and not stb: a header-only library cannot own stb's *_IMPLEMENTATION macro
-// (it must be defined in exactly one translation unit of the *user's* program), and tacmap only
-// needs grey-level maps in and debug pictures out. Binary PGM (netpbm P5, 8 or 16 bit) is a
-// ten-line format that any image tool reads; PNG output uses "stored" (uncompressed) deflate
-// blocks, which every PNG reader accepts, so no zlib is needed. Users with colour photos or
-// compressed PNG maps load them with their own library and hand tacmap an image<float>.
+// Why self-written and not stb: these need no dependency at all, and the core needs only
+// grey-level maps in and debug pictures out. Binary PGM (netpbm P5, 8 or 16 bit) is a ten-line
+// format that any image tool reads (stb's reader ignores maxval and accepts truncated files);
+// PNG output uses "stored" (uncompressed) deflate blocks, which every PNG reader accepts, so no
+// zlib is needed. Colour photos and compressed PNG or JPEG maps: tacmap/io/image_file.hpp
+// (`load_image`, through stb_image; the optional target tacmap::image_file).
 //
 // Intensities at the API are floats in [0, 1] (0 = black), like the map images tacmap works on.
 #pragma once

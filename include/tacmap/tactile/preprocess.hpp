@@ -1,8 +1,11 @@
 // tacmap: tactile preprocessing (paper, Sec. IV-A) — from raw taxel counts to a map-scale image.
 //
 // 1. Reject frames "collected unintentionally": the maximum below a threshold, or the sum of all
-//    taxels below a decision value. A rejected frame is reported to the caller (it is never
-//    silently used, nor silently dropped).
+//    taxels below a decision value. Also reject frames without a pattern: (max - min) / max
+//    below a contrast threshold (a saturated frame, every taxel at full scale, is the usual
+//    case); the descriptors would take their noise for a pattern and match the map anywhere. A
+//    rejected frame is reported to the caller (it is never silently used, nor silently
+//    dropped).
 // 2. Normalise by the frame's maximum, so the image falls into [0, 1].
 // 3. Resize from taxels to map pixels using the cell pitch and the map's scale: the paper's
 //    14 x 6 array at 3.4 mm on a 3.4/3 mm-per-px map becomes 42 x 18 px. The geometry comes with
@@ -29,6 +32,13 @@ enum class resize_method {
 struct preprocess_params {
   float min_peak = 200.0F;   ///< reject when the largest taxel is below this
   float min_total = 600.0F;  ///< reject when the sum of all taxels is below this (decision value)
+  /// Reject when (max - min) / max, the range the normalised image spans, is below this
+  /// fraction (not counts): the frame is flat, at whatever level. A saturated frame (every taxel
+  /// at full scale, 4095 for Weiss arrays) is flat; so is a press that loads every taxel alike.
+  /// Relative, so it holds for any read-out range and needs no change when min_peak does: a
+  /// frame with one unloaded taxel spans 1. 0.05 is 200 counts at full scale, 20 sigma of a
+  /// Weiss read-out's noise (about 10 counts). 0 turns the check off; a one-taxel array skips it.
+  float min_contrast = 0.05F;
   double mm_per_px = 3.4 / 3.0;  ///< the map's scale
   resize_method resize = resize_method::bilinear;
 
@@ -37,6 +47,10 @@ struct preprocess_params {
       detail::fail("preprocess_params: min_peak = ", min_peak, "; expected a finite count >= 0");
     if (!(std::isfinite(min_total) && min_total >= 0.0F))
       detail::fail("preprocess_params: min_total = ", min_total, "; expected a finite count >= 0");
+    if (!(min_contrast >= 0.0F && min_contrast <= 1.0F))
+      detail::fail("preprocess_params: min_contrast = ", min_contrast,
+                   "; expected a fraction of the peak in [0, 1] (0.05: 5 %; 0 turns the "
+                   "flat-frame check off)");
     if (!(std::isfinite(mm_per_px) && mm_per_px > 0.0))
       detail::fail("preprocess_params: mm_per_px = ", mm_per_px,
                    "; expected the map's scale, a finite value > 0 millimetres per pixel");
@@ -48,14 +62,16 @@ enum class frame_rejection {
   none,        ///< accepted
   weak_peak,   ///< max < min_peak: no deliberate contact
   weak_total,  ///< sum < min_total: too little contact area or force
+  flat,        ///< (max - min) / max < min_contrast: no pattern (e.g. saturated: all at full scale)
 };
 
 /// The outcome of preprocessing one frame. `pixels` is valid only when `accepted()`.
 struct preprocessed_frame {
   frame_rejection rejection = frame_rejection::none;
-  float peak = 0.0F;    ///< the frame's maximum (raw counts)
-  float total = 0.0F;   ///< the frame's sum (raw counts)
-  image<float> pixels;  ///< map-scale tactile image in [0, 1] (rows x cols in map pixels)
+  float peak = 0.0F;      ///< the frame's maximum (raw counts)
+  float total = 0.0F;     ///< the frame's sum (raw counts)
+  float contrast = 0.0F;  ///< (max - min) / max: the range the normalised image spans, 0..1
+  image<float> pixels;    ///< map-scale tactile image in [0, 1] (rows x cols in map pixels)
 
   [[nodiscard]] bool accepted() const { return rejection == frame_rejection::none; }
   /// A sentence for logs: why the frame was rejected (empty when accepted).
@@ -65,6 +81,9 @@ struct preprocessed_frame {
         return "rejected: peak " + std::to_string(peak) + " counts is below min_peak";
       case frame_rejection::weak_total:
         return "rejected: total " + std::to_string(total) + " counts is below min_total";
+      case frame_rejection::flat:
+        return "rejected: contrast (max - min) / max " + std::to_string(contrast) +
+               " is below min_contrast: no pattern (saturated, or every taxel loaded alike)";
       case frame_rejection::none:
         break;
     }
@@ -123,8 +142,8 @@ inline image<float> resize_taxels(const image<float>& src, Eigen::Index out_rows
 }  // namespace detail
 
 /// Preprocesses one frame (Sec. IV-A). Throws std::invalid_argument for a malformed frame
-/// (counts that disagree with the geometry, NaN or negative counts) or bad parameters; a weak
-/// frame is not an error but a rejection, reported in the result.
+/// (counts that disagree with the geometry, NaN or negative counts) or bad parameters; a weak or
+/// flat frame is not an error but a rejection, reported in the result.
 [[nodiscard]] inline preprocessed_frame preprocess(const tactile_frame& frame,
                                                    const preprocess_params& params = {}) {
   params.validate();
@@ -136,8 +155,14 @@ inline image<float> resize_taxels(const image<float>& src, Eigen::Index out_rows
     result.rejection = frame_rejection::weak_peak;
     return result;
   }
+  result.contrast = (result.peak - frame.counts.minCoeff()) / result.peak;
   if (result.total < params.min_total) {
     result.rejection = frame_rejection::weak_total;
+    return result;
+  }
+  // A one-taxel array is flat by construction: only min_peak and min_total judge its frames.
+  if (frame.counts.size() > 1 && result.contrast < params.min_contrast) {
+    result.rejection = frame_rejection::flat;
     return result;
   }
   const pixel_size window = tactile_window(frame.geometry, params.mm_per_px);

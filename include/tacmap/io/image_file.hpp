@@ -1,0 +1,226 @@
+// tacmap: maps from ordinary image files — PNG and JPEG (grey or colour) through stb_image, and
+// binary PGM through tacmap's own reader (io/image_io.hpp).
+//
+// Optional: the one tacmap header with an image-format dependency, stb_image (Debian
+// libstb-dev). tacmap/tacmap.hpp does not include it; link the CMake target tacmap::image_file
+// (created where stb_image.h is found) or have <stb/stb_image.h> or <stb_image.h> on the include
+// path.
+//
+// How stb_image is compiled. stb wants its implementation (STB_IMAGE_IMPLEMENTATION) in exactly
+// one translation unit of a program, which a header-only library cannot choose. So by default
+// this header compiles a private copy into each translation unit that includes it
+// (STB_IMAGE_STATIC: every stb function has internal linkage, so any number of translation
+// units link together), restricted to the PNG and JPEG decoders. The cost is code size: each
+// translation unit that calls load_image carries its own decoders (unused ones are dropped).
+// Escape hatch: define TACMAP_STB_IMAGE_EXTERNAL before including this header when your program
+// compiles stb_image itself (one .c/.cpp with STB_IMAGE_IMPLEMENTATION, PNG and JPEG enabled);
+// this header then only declares stb's API and calls yours. Without that macro, including
+// stb_image.h before this header is refused at compile time (the two would clash), and
+// compiling stb's implementation again after it in the same translation unit fails.
+//
+// Why PGM does not go through stb: stb's PNM reader ignores maxval (a 10-bit PGM reads as dark)
+// and reads a truncated file as if whole; decode_pgm scales by maxval and refuses truncation.
+#pragma once
+
+#if !defined(TACMAP_STB_IMAGE_EXTERNAL) && defined(STBI_INCLUDE_STB_IMAGE_H)
+#error \
+    "tacmap/io/image_file.hpp: stb_image.h was included before it. Define TACMAP_STB_IMAGE_EXTERNAL before including tacmap/io/image_file.hpp to use your own stb_image (compiled once in your program), or include tacmap's header first and do not compile stb_image yourself."
+#endif
+
+#if !defined(TACMAP_STB_IMAGE_EXTERNAL)
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#define STBI_ONLY_PNG
+#define STBI_ONLY_JPEG
+#define STBI_NO_HDR
+#define STBI_NO_LINEAR
+#endif
+// stb is C written for brevity: its warnings are not ours to fix, and must not reach the
+// consumer's build (whose flags we do not know), so they are silenced for the include only.
+#if defined(__clang__)
+#pragma clang diagnostic push
+#pragma clang diagnostic ignored "-Weverything"
+#elif defined(__GNUC__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wsign-conversion"
+#pragma GCC diagnostic ignored "-Wold-style-cast"
+#pragma GCC diagnostic ignored "-Wshadow"
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#pragma GCC diagnostic ignored "-Wunused-but-set-variable"
+#pragma GCC diagnostic ignored "-Wdouble-promotion"
+#pragma GCC diagnostic ignored "-Wcast-qual"
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
+#pragma GCC diagnostic ignored "-Wuseless-cast"
+#pragma GCC diagnostic ignored "-Wsign-compare"
+#pragma GCC diagnostic ignored "-Wpedantic"
+#elif defined(_MSC_VER)
+#pragma warning(push, 0)
+#endif
+#if defined(STBI_INCLUDE_STB_IMAGE_H)
+// TACMAP_STB_IMAGE_EXTERNAL, stb already included: including it again would compile its
+// implementation a second time when the including file defined STB_IMAGE_IMPLEMENTATION.
+#elif __has_include(<stb/stb_image.h>)
+#include <stb/stb_image.h>  // Debian, Ubuntu, Homebrew: stb's headers in a folder of their own
+#elif __has_include(<stb_image.h>)
+#include <stb_image.h>  // vcpkg, Conan, a copy next to the sources
+#else
+#error \
+    "tacmap/io/image_file.hpp needs stb_image.h (Debian: apt install libstb-dev); link the CMake target tacmap::image_file or add stb's folder to the include path."
+#endif
+#if defined(__clang__)
+#pragma clang diagnostic pop
+#elif defined(__GNUC__)
+#pragma GCC diagnostic pop
+#elif defined(_MSC_VER)
+#pragma warning(pop)
+#endif
+#if !defined(TACMAP_STB_IMAGE_EXTERNAL)
+// Configuration for the implementation above only; the consumer's own macros stay theirs.
+#undef STB_IMAGE_STATIC
+#undef STB_IMAGE_IMPLEMENTATION
+#undef STBI_ONLY_PNG
+#undef STBI_ONLY_JPEG
+#undef STBI_NO_HDR
+#undef STBI_NO_LINEAR
+#endif
+
+#include <climits>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "tacmap/image.hpp"
+#include "tacmap/io/image_io.hpp"
+
+namespace tacmap {
+
+namespace detail::image_file {
+
+/// What the first bytes say the file is, for the decoder's choice and the error message.
+enum class format { png, jpeg, pgm, unknown };
+
+inline bool starts_with(std::span<const std::uint8_t> bytes, std::string_view magic) {
+  if (bytes.size() < magic.size()) return false;
+  for (std::size_t i = 0; i < magic.size(); ++i)
+    if (bytes[i] != static_cast<std::uint8_t>(magic[i])) return false;
+  return true;
+}
+
+inline format sniff(std::span<const std::uint8_t> bytes) {
+  if (starts_with(bytes, "\x89PNG\r\n\x1a\n")) return format::png;
+  if (starts_with(bytes, "\xFF\xD8\xFF")) return format::jpeg;
+  if (starts_with(bytes, "P5")) return format::pgm;
+  return format::unknown;
+}
+
+/// A name for a format we do not read, so that the message says what the file is.
+inline std::string other_format(std::span<const std::uint8_t> bytes) {
+  if (starts_with(bytes, "GIF8")) return "a GIF";
+  if (starts_with(bytes, "BM")) return "a BMP";
+  if (starts_with(bytes, "II*") || starts_with(bytes, "MM\x00*")) return "a TIFF";
+  if (starts_with(bytes, "RIFF") && bytes.size() >= 12 && starts_with(bytes.subspan(8), "WEBP"))
+    return "a WebP";
+  if (starts_with(bytes, "P2")) return "an ASCII PGM (P2)";
+  if (starts_with(bytes, "P3") || starts_with(bytes, "P6")) return "a colour PPM";
+  std::string hex;
+  for (std::size_t i = 0; i < bytes.size() && i < 4; ++i) {
+    char byte[4];
+    std::snprintf(byte, sizeof byte, "%02X ", static_cast<unsigned>(bytes[i]));
+    hex += byte;
+  }
+  return "an unknown format (first bytes " + (hex.empty() ? std::string("none ") : hex) + ")";
+}
+
+inline const char* name_of(format f) { return f == format::png ? "PNG" : "JPEG"; }
+
+/// stb's reason, never null (stb leaves it unset on some paths).
+inline const char* stb_reason() {
+  const char* reason = stbi_failure_reason();
+  return reason != nullptr ? reason : "no reason given";
+}
+
+}  // namespace detail::image_file
+
+/// Decodes an image file's bytes into grey intensities in [0, 1] (0 = black). `name` (usually
+/// the file's path) is used in error messages.
+///
+/// - PNG (8 or 16 bits per sample; 16-bit files are read at 16 bits, value / 65535) and
+///   baseline or progressive JPEG, through stb_image; binary PGM (P5, any maxval, value / maxval)
+///   through decode_pgm.
+/// - Colour becomes grey with stb's luma, ITU-R BT.601 weights 0.299 R + 0.587 G + 0.114 B (as
+///   77, 150 and 29 / 256) on the stored, gamma-encoded values; a colour JPEG's own luma
+///   channel is used as is. Alpha is ignored, and so are colour profiles and PNG gamma: samples
+///   are taken as stored.
+///
+/// Throws std::invalid_argument, naming `name`, when the bytes are empty, not PNG, JPEG or
+/// binary PGM (GIF, BMP, TIFF, colour PPM...: convert them), or a file that stb cannot decode
+/// (truncated or corrupt; stb's reason is quoted).
+[[nodiscard]] inline image<float> load_image(std::span<const std::uint8_t> bytes,
+                                             std::string_view name = "image") {
+  namespace file = detail::image_file;
+  if (bytes.empty())
+    detail::fail("load_image: '", name,
+                 "' is empty (0 bytes); expected a PNG, JPEG or binary PGM image");
+  const file::format format = file::sniff(bytes);
+  if (format == file::format::pgm)
+    return decode_pgm(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
+                      name);
+  if (format == file::format::unknown)
+    detail::fail("load_image: '", name, "' is ", file::other_format(bytes),
+                 ", not a PNG, JPEG or binary PGM (P5) image; convert it, e.g. with "
+                 "'convert in.gif out.png' (ImageMagick)");
+  if (bytes.size() > static_cast<std::size_t>(INT_MAX))
+    detail::fail("load_image: '", name, "' is ", bytes.size(), " bytes; stb_image reads at most ",
+                 INT_MAX, " bytes — shrink the image first");
+  const auto* data = bytes.data();
+  const auto size = static_cast<int>(bytes.size());
+  int width = 0;
+  int height = 0;
+  int channels = 0;
+  const bool sixteen = stbi_is_16_bit_from_memory(data, size) != 0;
+  // One grey channel requested: stb converts colour with its luma weights (see above).
+  std::unique_ptr<void, void (*)(void*)> pixels(
+      sixteen
+          ? static_cast<void*>(stbi_load_16_from_memory(data, size, &width, &height, &channels, 1))
+          : static_cast<void*>(stbi_load_from_memory(data, size, &width, &height, &channels, 1)),
+      stbi_image_free);
+  if (!pixels)
+    detail::fail("load_image: cannot decode '", name, "' as ", file::name_of(format), " (",
+                 bytes.size(), " bytes; stb_image: ", file::stb_reason(),
+                 "); expected a complete, valid file — it may be truncated or corrupt: "
+                 "re-export or re-download it");
+  if (width < 1 || height < 1)
+    detail::fail("load_image: '", name, "' is ", width, " x ", height,
+                 " px; expected a non-empty image");
+  image<float> out(height, width);
+  if (sixteen) {
+    const auto* grey = static_cast<const std::uint16_t*>(pixels.get());
+    for (Eigen::Index i = 0; i < out.size(); ++i)
+      out.data()[i] = static_cast<float>(grey[i]) / 65535.0F;
+  } else {
+    const auto* grey = static_cast<const std::uint8_t*>(pixels.get());
+    for (Eigen::Index i = 0; i < out.size(); ++i)
+      out.data()[i] = static_cast<float>(grey[i]) / 255.0F;
+  }
+  return out;
+}
+
+/// Reads an image file (PNG, JPEG or binary PGM; see the overload above) into grey intensities in
+/// [0, 1]. Throws std::invalid_argument naming the path when the file cannot be opened or
+/// decoded. The map's scale (mm per px) is not in the file: give it to the grid, or `rescale`.
+[[nodiscard]] inline image<float> load_image(const std::filesystem::path& path) {
+  const std::string bytes = detail::image_io::read_file(path, "load_image");
+  return load_image(std::span<const std::uint8_t>(
+                        reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()),
+                    path.string());
+}
+
+}  // namespace tacmap
