@@ -72,6 +72,16 @@ tacmap::tactile_frame frame_at(const tacmap::image<float>& map, Eigen::Index row
   return f;
 }
 
+// The localizer's filter alone (make_planar_filter with the defaults: the model above behind
+// appearance_likelihood, and robust_motion's floor and wide component): predict + update, as
+// planar_touch_latent/one_pass, whose ratio to this is the robust motion's cost per touch.
+void planar_touch_default_filter(benchmark::State& state) {
+  const auto map = bench_map();
+  auto filter = tacmap::make_planar_filter({}, map, 3.4 / 3.0, {.width = 18, .height = 42});
+  time_touches(state, filter, map, {.dx_mm = 4.5, .dy_mm = 0.0}, {.dx_mm = -4.5, .dy_mm = 0.0});
+}
+BENCHMARK(planar_touch_default_filter)->Unit(benchmark::kMicrosecond);
+
 void planar_touch_localizer(benchmark::State& state) {
   const auto map = bench_map();
   tacmap::localizer loc(map, 3.4 / 3.0);

@@ -295,13 +295,14 @@ int main(int argc, char** argv) try {
       ->delimiter(',')
       ->check(CLI::Range(0.0, 0.999));
   std::vector<double> wide_probabilities;
-  double wide_sigma = 4.0;
+  double wide_sigma = tacmap::localizer_config{}.wide_sigma_mm;
   app.add_option("--wide-probability", wide_probabilities,
                  "probability that a move is off by more than --motion-sigma: a wide component "
-                 "of --wide-sigma (robust_motion; comma-separated to compare)")
+                 "of --wide-sigma (robust_motion; comma-separated to compare; default 0.1 for "
+                 "known headings, 0 for pose grids)")
       ->delimiter(',')
       ->check(CLI::Range(0.0, 0.999));
-  app.add_option("--wide-sigma", wide_sigma, "the wide component's spread, mm per axis (4)")
+  app.add_option("--wide-sigma", wide_sigma, "the wide component's spread, mm per axis (3)")
       ->check(CLI::Range(0.01, 100.0));
   app.add_option("--touches", photo_touches,
                  "touches per sequence of the photographs' protocols (7; the gecko's are fixed)")

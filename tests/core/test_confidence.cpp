@@ -3,6 +3,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -208,4 +209,26 @@ TEST_CASE("confidence_params refuses a contradiction threshold above 0 or NaN") 
   CHECK_THROWS_AS(p.validate(), std::invalid_argument);
   CHECK(std::string(tacmap::to_string(tacmap::verdict::contradicted)) == "contradicted");
   CHECK(std::string(tacmap::to_string(tacmap::verdict::rejected_frame)) == "rejected_frame");
+}
+
+TEST_CASE("most_probable_disc's mass is probability_within of its centre, for any belief") {
+  auto f = tacmap_test::lattice_filter();
+  const Eigen::Index n = f.grid().size();
+  std::uint32_t state = 12345;
+  for (int trial = 0; trial < 6; ++trial) {
+    tacmap::belief_array<grid_t> prior(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      state = state * 1664525U + 1013904223U;
+      // Spiky and flat beliefs, with the best disc near an edge in some of them.
+      prior(i) = trial % 2 == 0 ? static_cast<float>(state >> 8) / 16777216.0F
+                                : ((state >> 8) % 97 == 0 ? 1.0F : 1e-4F);
+    }
+    f.set_prior(prior / prior.sum());
+    for (const double radius : {0.5, 1.0, 2.0, 3.7, 5.0, 9.0}) {
+      CAPTURE(trial);
+      CAPTURE(radius);
+      const auto [centre, mass] = f.most_probable_disc(radius);
+      CHECK(mass == doctest::Approx(f.probability_within(centre, radius)).epsilon(1e-9));
+    }
+  }
 }

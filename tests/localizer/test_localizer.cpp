@@ -7,6 +7,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sim/gecko_protocol.hpp"
@@ -173,9 +174,12 @@ TEST_CASE("a move off the map restarts the paper's configuration instead of fail
   CHECK(static_cast<double>(loc.belief().sum()) == doctest::Approx(1.0).epsilon(1e-4));
 }
 
-TEST_CASE("a touch far from where the track put the sensor is contradicted") {
+// Localized on sequence 0, then kidnapped: the next touches are at the location farthest from
+// the last one, and the arm reports no motion. Returns the verdicts and errors of those touches.
+std::vector<std::pair<tacmap::verdict, double>> kidnapped(const tacmap::localizer_config& config,
+                                                          double* support_first = nullptr) {
   const auto& p = gecko();
-  tacmap::localizer loc(p.map, p.mm_per_px, fast_config());
+  tacmap::localizer loc(p.map, p.mm_per_px, config);
   auto sim = gecko_simulator(11);
   const auto& seq = p.sequences[0];
   tacmap::touch_result r;
@@ -184,8 +188,6 @@ TEST_CASE("a touch far from where the track put the sensor is contradicted") {
     r = t == 0 ? loc.touch(frame) : loc.touch(frame, seq[t].measured_motion);
   }
   REQUIRE(r.verdict == tacmap::verdict::localized);
-  // Kidnapped: the next touches are at the location farthest from the last one, and the arm
-  // reports no motion.
   const auto& last = p.locations[seq.back().location];
   std::size_t far = 0;
   double farthest = 0.0;
@@ -194,14 +196,33 @@ TEST_CASE("a touch far from where the track put the sensor is contradicted") {
     if (d > farthest) farthest = d, far = i;
   }
   REQUIRE(farthest > 20.0);
-  bool contradicted = false;
-  for (int t = 0; t < 3 && !contradicted; ++t) {
+  const Eigen::Vector2d truth(p.locations[far].x_mm, p.locations[far].y_mm);
+  std::vector<std::pair<tacmap::verdict, double>> out;
+  for (int t = 0; t < 3; ++t) {
     r = loc.touch(sim.render(p.locations[far].pose()), tacmap::odometry{});
-    contradicted = r.verdict == tacmap::verdict::contradicted;
-    CHECK(r.verdict != tacmap::verdict::localized);  // never a confident wrong answer
+    if (t == 0 && support_first) *support_first = r.log_prediction_support;
+    out.emplace_back(r.verdict, (r.position_mm - truth).norm());
   }
-  CHECK(contradicted);
-  CHECK(r.log_prediction_support < loc.config().confidence.contradiction);
+  return out;
+}
+
+TEST_CASE("a kidnap: contradicted at once without the wide component, never confidently wrong") {
+  auto config = fast_config();
+  config.wide_probability = 0.0;  // the floor alone: the old place keeps its mass
+  double support = 0.0;
+  const auto narrow = kidnapped(config, &support);
+  CHECK(narrow[0].first == tacmap::verdict::contradicted);
+  CHECK(support < config.confidence.contradiction);
+  // With the defaults' wide component as well: whatever the verdicts, "localized" is never
+  // wrong, and the track is back within three touches.
+  const auto wide = kidnapped(fast_config());
+  for (const auto& [v, error_mm] : wide) {
+    CAPTURE(error_mm);
+    if (v == tacmap::verdict::localized) CHECK(error_mm < 5.0);
+  }
+  CHECK(wide.back().second < 5.0);
+  for (const auto& [v, error_mm] : narrow)
+    if (v == tacmap::verdict::localized) CHECK(error_mm < 5.0);
 }
 
 TEST_CASE("a localizer refuses bad input with messages that say what to do") {

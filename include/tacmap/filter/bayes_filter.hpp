@@ -292,7 +292,8 @@ class bayes_filter {
   /// the disc's centre sits where most of the mass is, not on the highest single state. The
   /// grid's positions must form a regular lattice (planar_grid, pose_grid: one state per map
   /// pixel); throws std::logic_error otherwise, std::invalid_argument for a radius that is
-  /// negative or not finite.
+  /// negative or not finite. Uses scratch kept in the filter: not for concurrent calls on one
+  /// filter (like every other member).
   [[nodiscard]] std::pair<Eigen::Vector2d, double> most_probable_disc(double radius_mm) const
       requires(Grid::dimension >= 2) {
     if (!(std::isfinite(radius_mm) && radius_mm >= 0.0))
@@ -307,7 +308,10 @@ class bayes_filter {
     // row runs, each a difference of two prefix sums. The prefix rows are padded by the widest
     // run on both sides (clamped values), so every run of a row is one shifted vector
     // difference over the whole row.
-    image<double> p = image<double>::Zero(rows, cols);
+    // Scratch kept between calls: three fresh images per touch cost more (page faults of the
+    // allocations) than the scan itself.
+    image<double>& p = disc_marginal_;
+    p.setZero(rows, cols);
     Eigen::Map<Eigen::ArrayXd> p_flat(p.data(), plane);
     for (Eigen::Index at = 0; at < belief_.size(); at += plane)
       p_flat += Eigen::Map<const belief_type>(belief_.data() + at, plane).template cast<double>();
@@ -320,25 +324,35 @@ class bayes_filter {
           std::floor(std::sqrt(std::max(0.0, radius_mm * radius_mm - dy * dy)) / sx + 1e-9));
     }
     const Eigen::Index pad = half[0];
-    image<double> prefix(rows, cols + 1 + 2 * pad);  // prefix(r, pad + j) = sum of p(r, 0..j-1)
+    image<double>& prefix = disc_prefix_;  // prefix(r, pad + j) = sum of p(r, 0..j-1)
+    prefix.resize(rows, cols + 1 + 2 * pad);
     for (Eigen::Index r = 0; r < rows; ++r) {
       double run = 0.0;
       for (Eigen::Index j = 0; j <= pad; ++j) prefix(r, j) = 0.0;
       for (Eigen::Index c = 0; c < cols; ++c) prefix(r, pad + c + 1) = run += p(r, c);
       for (Eigen::Index j = pad + cols + 1; j < prefix.cols(); ++j) prefix(r, j) = run;
     }
-    image<double> disc = image<double>::Zero(rows, cols);
-    for (Eigen::Index r = 0; r < rows; ++r)
+    // Plain loops over contiguous rows (vectorised by the compiler): rows are short (~100), and
+    // an Eigen expression per (row, run) costs more than its arithmetic.
+    image<double>& disc = disc_mass_;
+    disc.setZero(rows, cols);
+    const Eigen::Index stride = prefix.cols();
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      double* out = disc.data() + r * cols;
       for (Eigen::Index dr = -reach_r; dr <= reach_r; ++dr) {
         const Eigen::Index rr = r + dr;
         if (rr < 0 || rr >= rows) continue;
         const Eigen::Index h = half[static_cast<std::size_t>(dr < 0 ? -dr : dr)];
         // Row rr's run c - h .. c + h for every c at once.
-        disc.row(r) +=
-            prefix.row(rr).segment(pad + h + 1, cols) - prefix.row(rr).segment(pad - h, cols);
+        const double* hi = prefix.data() + rr * stride + pad + h + 1;
+        const double* lo = prefix.data() + rr * stride + pad - h;
+        for (Eigen::Index c = 0; c < cols; ++c) out[c] += hi[c] - lo[c];
       }
-    Eigen::Index best_r = 0, best_c = 0;
-    disc.maxCoeff(&best_r, &best_c);
+    }
+    Eigen::Index best = 0;
+    for (Eigen::Index i = 1; i < plane; ++i)
+      if (disc.data()[i] > disc.data()[best]) best = i;
+    const Eigen::Index best_r = best / cols, best_c = best % cols;
     // Discs around a sharp peak all hold (nearly) the same mass, and the scan keeps the first:
     // the centre is the mean of the belief inside the best disc instead, which sits on the
     // peak (or the middle of a plateau), and the probability is that of its own disc.
@@ -359,7 +373,19 @@ class bayes_filter {
         (inside > 0.0
              ? Eigen::Vector2d(sum / inside)
              : Eigen::Vector2d(offsets_mm_.col(best_r * cols + best_c).template head<2>()));
-    return {centre, probability_within(centre, radius_mm)};
+    // Its own disc's mass (what probability_within(centre, radius_mm) gives), from the cells
+    // near the best one only: the centre is a mean of cells within the radius of the best, so
+    // every cell within the radius of the centre is within twice the radius of the best.
+    const Eigen::Vector2d c = centre - origin_mm_.template head<2>();
+    const double r2 = radius_mm * radius_mm;
+    double mass = 0.0;
+    for (Eigen::Index rr = std::max<Eigen::Index>(0, best_r - 2 * reach_r - 2);
+         rr <= std::min(rows - 1, best_r + 2 * reach_r + 2); ++rr)
+      for (Eigen::Index cc = std::max<Eigen::Index>(0, best_c - 2 * pad - 2);
+           cc <= std::min(cols - 1, best_c + 2 * pad + 2); ++cc)
+        if ((offsets_mm_.col(rr * cols + cc).template head<2>() - c).squaredNorm() <= r2)
+          mass += p(rr, cc);
+    return {centre, std::min(mass, 1.0)};
   }
 
   /// True when the grid's positions form an axis-aligned regular lattice (planar_grid,
@@ -532,6 +558,8 @@ class bayes_filter {
   Measurement measurement_;
   belief_type belief_;
   belief_type scratch_;
+  // most_probable_disc's scratch: the position marginal, its row prefix sums, the disc masses.
+  mutable image<double> disc_marginal_, disc_prefix_, disc_mass_;
   belief_type log_likelihood_;
   typename estimate_type::vector_type origin_mm_;
   Eigen::Matrix<double, Grid::dimension, Eigen::Dynamic> offsets_mm_;
