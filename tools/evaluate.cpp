@@ -24,6 +24,8 @@
 //
 //   tacmap-evaluate --photo camera.png --model sift_lite,ncc --output eval.csv
 //   tacmap-evaluate --scenario realistic --model ncc --tau 0.05,0.1,0.2
+#include <unistd.h>  // isatty
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -335,7 +337,7 @@ int main(int argc, char** argv) try {
   app.add_option(
       "--min-success-rate", min_success,
       "exit 1 when any map x configuration localizes fewer than this fraction of sequences");
-  app.add_flag("--quiet,-q", quiet, "no progress bar");
+  app.add_flag("--quiet,-q", quiet, "no progress bar (it is drawn only when stderr is a terminal)");
   app.add_option("--scenario", scenario_name,
                  "ideal (the map's own image, a new sensor), realistic (camera map, "
                  "misregistration, press jitter, worn sensor; sim/scenario.hpp) or unknown "
@@ -348,6 +350,9 @@ int main(int argc, char** argv) try {
       app.add_option(k.flag, k.value, std::string(k.help) + " (default: the scenario's)")
           ->check(CLI::Range(k.lo, k.hi));
   CLI11_PARSE(app, argc, argv);
+  // The progress bar redraws one line with carriage returns: on a terminal only, never into
+  // a log file.
+  quiet = quiet || isatty(fileno(stderr)) == 0;
 
   if (sequences < 0)
     throw CLI::ValidationError("--sequences", std::to_string(sequences) +

@@ -1,0 +1,535 @@
+// tacmap's Python module: the front door — `Localizer`, its configuration and what a touch
+// returns (C++ include/tacmap/localizer.hpp).
+#include "bindings.hpp"
+// (bindings.hpp first: it defines TACMAP_ASSERT for the tacmap headers below.)
+
+#include <array>
+#include <mutex>
+#include <variant>
+
+#include "tacmap/localizer.hpp"
+#include "tacmap/tactile/preprocess.hpp"
+
+namespace tacmap::python {
+
+namespace {
+
+// ---- enums: the names of the C++ to_string functions (and of tacmap-evaluate's options) ----
+
+const choices<measurement_kind> model_names = {{"sift_lite", measurement_kind::lite},
+                                               {"classic_sift", measurement_kind::classic},
+                                               {"ncc", measurement_kind::ncc}};
+const choices<pairing> pairing_names = {{"all_pairs", pairing::all_pairs},
+                                        {"aligned", pairing::aligned}};
+const choices<likelihood_shape> shape_names = {{"inverse", likelihood_shape::inverse},
+                                               {"exponential", likelihood_shape::exponential}};
+const choices<window_features> feature_names = {{"per_window", window_features::per_window},
+                                                {"shared_dense", window_features::shared_dense}};
+const choices<appearance_handling> appearance_names_ = {
+    {"fixed", appearance_handling::fixed},
+    {"latent", appearance_handling::latent},
+    {"unsigned", appearance_handling::unsigned_gradients},
+    {"per_patch", appearance_handling::per_patch}};
+const choices<resize_method> resize_names = {{"bilinear", resize_method::bilinear},
+                                             {"nearest", resize_method::nearest}};
+const choices<frame_rejection> rejection_names = {{"none", frame_rejection::none},
+                                                  {"weak_peak", frame_rejection::weak_peak},
+                                                  {"weak_total", frame_rejection::weak_total},
+                                                  {"flat", frame_rejection::flat}};
+
+std::string number(double v) { return py::repr(py::float_(v)); }
+
+// ---- Localizer: the C++ object and the lock that makes it safe to share between threads ----
+
+// A localizer and a mutex. The C++ localizer is not thread-safe; the Python one releases the GIL
+// during touches, so two Python threads could otherwise run one localizer at once. Every method
+// takes the mutex with the GIL released (never the other way round, so no deadlock).
+struct py_localizer {
+  py_localizer(image<float> map, double mm_per_px, localizer_config config, taxel_geometry sensor)
+      : impl(std::move(map), mm_per_px, std::move(config), sensor) {}
+  localizer impl;
+  std::mutex mutex;
+};
+
+// Runs f(localizer) with the GIL released and the localizer's lock held. f must not touch
+// Python objects.
+template <class F>
+auto locked(py_localizer& self, F&& f) {
+  py::gil_scoped_release release;
+  const std::lock_guard<std::mutex> lock(self.mutex);
+  return f(self.impl);
+}
+
+std::string sensor_shape(const taxel_geometry& s) {
+  return "(" + std::to_string(s.rows) + ", " + std::to_string(s.cols) + ") (the localizer's " +
+         "sensor: " + std::to_string(s.rows) + " x " + std::to_string(s.cols) + " taxels)";
+}
+
+// A Frame (copied: another thread may write to its counts while the GIL is released) or a 2-D
+// array of counts for the localizer's sensor.
+tactile_frame frame_of(const localizer& loc, const py::object& obj, const std::string& what) {
+  if (py::isinstance<tactile_frame>(obj)) return obj.cast<tactile_frame>();
+  tactile_frame f;
+  f.geometry = loc.sensor();
+  f.counts = to_image(obj, what, sensor_shape(loc.sensor()), loc.sensor().rows, loc.sensor().cols);
+  return f;
+}
+
+using motion = std::variant<std::monostate, odometry, sensor_odometry>;
+
+// None, (dx_mm, dy_mm) in the map's frame or (du_mm, dv_mm, dtheta_rad) in the sensor's.
+motion motion_of(const py::object& moved, const std::string& what) {
+  if (moved.is_none()) return {};
+  const std::string expected =
+      "None (no motion since the previous touch), (dx_mm, dy_mm) in the map's frame or "
+      "(du_mm, dv_mm, dtheta_rad) in the sensor's";
+  if (py::isinstance<py::str>(moved) || PySequence_Check(moved.ptr()) == 0)
+    throw py::type_error(what + ": got " +
+                         std::string(py::str(py::type::of(moved).attr("__name__"))) +
+                         "; expected " + expected);
+  const auto seq = py::reinterpret_borrow<py::sequence>(moved);
+  const auto n = py::len(seq);
+  if (n != 2 && n != 3)
+    throw py::value_error(what + ": " + std::to_string(n) + " values (" +
+                          std::string(py::repr(moved)) + "); expected " + expected);
+  std::array<double, 3> v{};
+  for (std::size_t k = 0; k < n; ++k) {
+    try {
+      v[k] = py::float_(seq[k]);
+    } catch (py::error_already_set&) {
+      throw py::type_error(what + ": element " + std::to_string(k) + " = " +
+                           std::string(py::repr(seq[k])) + " is not a number; expected " +
+                           expected);
+    }
+  }
+  if (n == 2) return odometry{.dx_mm = v[0], .dy_mm = v[1]};
+  return sensor_odometry{.du_mm = v[0], .dv_mm = v[1], .dtheta_rad = v[2]};
+}
+
+py::tuple extent_of(const localizer& loc) {
+  const planar_grid<float>& g = loc.positions();
+  const auto first = g.state_mm(0);
+  const double h = 0.5 * g.mm_per_px();
+  const double left = first(0) - h, top = first(1) - h;
+  const double right = left + static_cast<double>(g.cols()) * g.mm_per_px();
+  const double bottom = top + static_cast<double>(g.rows()) * g.mm_per_px();
+  return py::make_tuple(left, right, bottom, top);
+}
+
+constexpr const char* localizer_doc = R"doc(One object from map to estimate (C++ tacmap::localizer).
+
+Build it from the map image (intensities, any range, row 0 at the top), the map's scale and the
+sensor's geometry; call `touch` for every frame with the arm's motion since the previous call
+(or `touch_at` with the arm's pose)::
+
+    loc = tacmap.Localizer(map, 0.2)          # defaults: the best measured
+    r = loc.touch(frame)                      # first touch
+    r = loc.touch(frame, (4.0, 0.0))          # moved 4 mm to the right
+    if r.verdict == "localized": use(r.position_mm)
+
+Preparing the map (the measurement model's descriptors of every window) happens once, in the
+constructor; `reset()` starts a new exploration on the same map. Each touch is one step of the
+paper's Table 1: predict with the motion since the previous touch, update with the frame.
+
+Frames are Frame objects or 2-D arrays of raw counts, shape (sensor.rows, sensor.cols), any
+real dtype (copied to float32). Positions are millimetres in the map frame: x to the right
+along columns, y down along rows, origin at the map's top-left corner.
+
+The GIL is released while the map is prepared and during touches; one localizer may be shared
+between threads (calls are serialised), but two localizers run in parallel.)doc";
+
+}  // namespace
+
+void bind_config(py::module_& m) {
+  // ---- PreprocessParams ----
+  py::class_<preprocess_params> pre(m, "PreprocessParams");
+  pre.def_readwrite("min_peak", &preprocess_params::min_peak,
+                    "Reject when the largest taxel is below this (raw counts).")
+      .def_readwrite("min_total", &preprocess_params::min_total,
+                     "Reject when the sum of all taxels is below this (decision value).")
+      .def_readwrite("min_contrast", &preprocess_params::min_contrast,
+                     "Reject when (max - min) / max, the range the normalised image spans, is "
+                     "below this fraction (not counts): the frame is flat, at whatever level (a "
+                     "saturated frame, every taxel at full scale, is flat). 0 turns the check "
+                     "off.")
+      .def_readwrite("mm_per_px", &preprocess_params::mm_per_px,
+                     "The map's scale (a Localizer replaces it by its map's).");
+  enum_property(pre, "resize", &preprocess_params::resize, resize_names,
+                "How taxel values are spread over map pixels: 'bilinear' interpolates between "
+                "taxel centres (smooth); 'nearest' fills each taxel's cell (blocky).");
+  keyword_struct<preprocess_params>(
+      pre, {"min_peak", "min_total", "min_contrast", "mm_per_px", "resize"},
+      "Configuration of tactile preprocessing (paper, Sec. IV-A; C++ "
+      "tacmap::preprocess_params): reject frames collected unintentionally (weak) or without "
+      "a pattern (flat), normalise by the maximum, resize to the map's scale. Thresholds are "
+      "raw counts (Weiss arrays: 12 bit, 0..4095).");
+
+  // ---- ConfidenceParams ----
+  py::class_<confidence_params> conf(m, "ConfidenceParams");
+  conf.def_readwrite("radius_mm", &confidence_params::radius_mm,
+                     "What 'right' means: the estimate within this distance of the truth (mm). "
+                     "5 mm: the paper's success criterion.")
+      .def_readwrite("threshold", &confidence_params::threshold,
+                     "The belief's P(error <= radius_mm) at or above which the verdict is "
+                     "'localized'.")
+      .def_readwrite("heading_tolerance_rad", &confidence_params::heading_tolerance_rad,
+                     "Pose grids: what a right heading means (radians; 15 degrees).")
+      .def_readwrite("contradiction", &confidence_params::contradiction,
+                     "The touch's log_prediction_support below which the verdict is "
+                     "'contradicted' (nats; -2: the touch 7.4 times more probable elsewhere). "
+                     "-inf turns it off.");
+  keyword_struct<confidence_params>(
+      conf, {"radius_mm", "threshold", "heading_tolerance_rad", "contradiction"},
+      "When the filter says 'localized' (C++ tacmap::confidence_params): the belief's "
+      "probability that the estimate lies within radius_mm of the truth, against a threshold; "
+      "and when a touch contradicts the prediction.");
+
+  // ---- LocalizerConfig ----
+  py::class_<localizer_config> cfg(m, "LocalizerConfig");
+  enum_property(cfg, "model", &localizer_config::model, model_names,
+                "Which measurement model localizes: 'sift_lite' (the paper's 2 x 2 x 8 dense "
+                "SIFT, eq. (1)-(2)), 'classic_sift' (4 x 4 x 8 dense SIFT; the default, best "
+                "measured) or 'ncc' (normalised cross-correlation baseline).");
+  enum_property(cfg, "pairs", &localizer_config::pairs, pairing_names,
+                "Descriptor models: which tactile patch is compared with which window patch "
+                "in eq. (1): 'all_pairs' (the paper) or 'aligned' (patch m against patch m).");
+  enum_property(cfg, "shape", &localizer_config::shape, shape_names,
+                "Descriptor models: how a distance becomes a likelihood: 'inverse' (the "
+                "paper's eq. (2)) or 'exponential' (exp(-d / tau)).");
+  enum_property(cfg, "features", &localizer_config::features, feature_names,
+                "Descriptor models: where a window's descriptors come from: 'per_window' (the "
+                "paper: each window described on its own, like a tactile image) or "
+                "'shared_dense' (computed once over the whole map and shared by overlapping "
+                "windows: far cheaper, slightly different borders).");
+  cfg.def_readwrite("tau", &localizer_config::tau,
+                    "Temperature: exponential shape (descriptor distance units) or NCC (log p "
+                    "= ncc / tau). None: the model's own default (descriptor 0.15, NCC 0.1).")
+      .def_readwrite("tempering", &localizer_config::tempering, "Exponent on the likelihood.")
+      .def_readwrite("motion_sigma_mm", &localizer_config::motion_sigma_mm,
+                     "Odometry noise per axis (odometry_gaussian sigma, Sec. III-B), mm.")
+      .def_readwrite("motion_k", &localizer_config::motion_k,
+                     "Odometry noise neighbours (the paper: 8).")
+      .def_readwrite("preprocessing", &localizer_config::preprocessing,
+                     "Frame thresholds (PreprocessParams); mm_per_px is replaced by the map's.")
+      .def_readwrite("confidence", &localizer_config::confidence,
+                     "When the verdict is 'localized' or 'contradicted' (ConfidenceParams).")
+      .def_readwrite("headings", &localizer_config::headings,
+                     "Unknown orientation: 0 localizes over (x, y) with the heading known (the "
+                     "paper); N >= 1 over (x, y, theta) with N headings (descriptor models only; "
+                     "odometry then in the sensor's frame).")
+      .def_readwrite("turn_sigma_rad", &localizer_config::turn_sigma_rad,
+                     "Pose motion: turn noise (headings > 0), radians.");
+  enum_property(cfg, "appearance", &localizer_config::appearance, appearance_names_,
+                "How the map's brightness relates to the object's height: 'fixed' (raised "
+                "parts look bright, as the paper's gecko), 'latent' (both relations are "
+                "hypotheses of the filter, weighed by the touches; the default), 'unsigned' "
+                "(descriptors of unsigned gradient orientation) or 'per_patch' (each tactile "
+                "patch matched with whichever sign fits better; aligned pairs only).");
+  cfg.def_readwrite("appearance_switch", &localizer_config::appearance_switch,
+                    "'latent' only: probability that the appearance hypothesis changes between "
+                    "touches, in [0, 0.5]. None: LocalizerConfig.default_appearance_switch.")
+      .def_readwrite("lost_probability", &localizer_config::lost_probability,
+                     "The probability that a move lands the sensor anywhere: the floor that "
+                     "lets the filter recover from odometry outliers, slips and kidnaps. None: "
+                     "LocalizerConfig.default_lost_probability; 0: the paper's motion model.")
+      .def_readwrite("wide_probability", &localizer_config::wide_probability,
+                     "The probability that a move is off by more than motion_sigma_mm (a wider "
+                     "Gaussian of wide_sigma_mm). None: the C++ default "
+                     "(LocalizerConfig.default_wide_probability where the heading is known); 0: "
+                     "none.")
+      .def_readwrite("wide_sigma_mm", &localizer_config::wide_sigma_mm,
+                     "The wide motion component's spread, mm.")
+      .def_readonly_static("default_appearance_switch",
+                           &localizer_config::default_appearance_switch)
+      .def_readonly_static("default_lost_probability", &localizer_config::default_lost_probability)
+      .def_readonly_static("default_wide_probability", &localizer_config::default_wide_probability)
+      .def_static("paper", &localizer_config::paper,
+                  "The paper's configuration (Sec. III-C, IV): SIFT-lite, all pairs (eq. (1)), "
+                  "the inverse likelihood (eq. (2)), per-window features, a fixed appearance "
+                  "and the Gaussian motion model without a floor.")
+      .def("name", &localizer_config::name,
+           "A short name for tables: 'sift_lite/all_pairs/inverse/per_window', with "
+           "'/tau=0.5' when tau is set, and so on.");
+  keyword_struct<localizer_config>(
+      cfg,
+      {"model", "pairs", "shape", "features", "tau", "tempering", "motion_sigma_mm", "motion_k",
+       "preprocessing", "confidence", "headings", "turn_sigma_rad", "appearance",
+       "appearance_switch", "lost_probability", "wide_probability", "wide_sigma_mm"},
+      "Everything that configures the filter a Localizer (or a simulated experiment) runs (C++ "
+      "tacmap::localizer_config): the measurement model, the motion model, the latent "
+      "appearance, preprocessing and the verdict. The defaults are the best measured (README, "
+      "'Localization results', 'The photo is not the touch', 'Confidence', 'When exploration "
+      "goes wrong'); the paper's own configuration is LocalizerConfig.paper().\n\n"
+      "    LocalizerConfig(model='sift_lite', features='shared_dense')  # fast\n\n"
+      "Enumerations are strings (the names tacmap-evaluate uses). The keyword constructor "
+      "validates the whole configuration (ValueError naming the setting); attributes set later "
+      "are validated when a Localizer is built.");
+
+  // ---- preprocess ----
+  py::class_<preprocessed_frame>(m, "PreprocessedFrame",
+                                 "The outcome of preprocessing one frame (C++ "
+                                 "tacmap::preprocessed_frame).")
+      .def_property_readonly(
+          "rejection",
+          [](const preprocessed_frame& p) { return choice_name(p.rejection, rejection_names); },
+          "Why the frame was not used: 'none' (accepted), 'weak_peak', 'weak_total' or "
+          "'flat'.")
+      .def_property_readonly("accepted", &preprocessed_frame::accepted)
+      .def_readonly("peak", &preprocessed_frame::peak, "The frame's maximum (raw counts).")
+      .def_readonly("total", &preprocessed_frame::total, "The frame's sum (raw counts).")
+      .def_readonly("contrast", &preprocessed_frame::contrast,
+                    "The frame's max - min (raw counts).")
+      .def_property_readonly(
+          "pixels",
+          [](const preprocessed_frame& p) -> py::object {
+            if (!p.accepted()) return py::none();
+            return to_numpy(p.pixels);
+          },
+          "The map-scale tactile image in [0, 1] (rows x cols in map pixels), or None when "
+          "rejected.")
+      .def("reason", &preprocessed_frame::reason,
+           "A sentence for logs: why the frame was rejected (empty when accepted).");
+  m.def(
+      "preprocess",
+      [](const py::object& frame, const preprocess_params& params) {
+        const tactile_frame f =
+            py::isinstance<tactile_frame>(frame)
+                ? frame.cast<tactile_frame>()
+                : py::module_::import("tacmap").attr("Frame")(frame).cast<tactile_frame>();
+        return preprocess(f, params);
+      },
+      py::arg("frame"), py::arg("params") = preprocess_params{},
+      "Preprocesses one frame (paper, Sec. IV-A): rejects weak or flat frames, normalises by "
+      "the maximum and resizes taxels to map pixels at params.mm_per_px. `frame`: a Frame or a "
+      "2-D array of counts (then taxels at 3.4 mm). Raises ValueError for a malformed frame "
+      "(NaN or negative counts) or bad parameters; a weak or flat frame is not an error but a "
+      "rejection, reported in the result.");
+}
+
+void bind_localizer(py::module_& m) {
+  // ---- TouchResult ----
+  py::class_<touch_result>(m, "TouchResult",
+                           "What one touch gave (C++ tacmap::touch_result): the estimate, how "
+                           "sure the filter is of it, and what to do. Read-only.")
+      .def_property_readonly(
+          "verdict", [](const touch_result& r) { return to_string(r.verdict); },
+          "'localized': act on position_mm; 'uncertain': touch again; 'contradicted': this "
+          "touch fits elsewhere much better than where the filter expected it (slip, outlier, "
+          "kidnap?) — touch again near here or re-grasp; 'rejected_frame': the frame was no "
+          "touch (the arm's motion was still applied).")
+      .def_property_readonly(
+          "position_mm",
+          [](const touch_result& r) { return vec2(r.position_mm.x(), r.position_mm.y()); },
+          "The estimate (map frame, mm, numpy (x, y)): the centre of the disc of "
+          "confidence.radius_mm that holds the most belief.")
+      .def_readonly("heading_rad", &touch_result::heading_rad,
+                    "The sensor's heading on the map (most probable); 0 when it is known.")
+      .def_readonly("probability_within", &touch_result::probability_within,
+                    "The belief's P(|position - position_mm| <= radius).")
+      .def_readonly("heading_probability", &touch_result::heading_probability,
+                    "P(|heading - heading_rad| <= heading tolerance); 1 when the heading is "
+                    "known.")
+      .def_property_readonly(
+          "most_probable_mm",
+          [](const touch_result& r) {
+            return vec2(r.most_probable_mm.x(), r.most_probable_mm.y());
+          },
+          "The single most probable state's position (mm, numpy (x, y)).")
+      .def_property_readonly(
+          "covariance_mm2",
+          [](const touch_result& r) -> Eigen::Matrix2d { return r.covariance_mm2; },
+          "The belief's covariance of position, mm^2 (numpy (2, 2)).")
+      .def_readonly("entropy_nats", &touch_result::entropy_nats,
+                    "The belief's entropy over positions, nats.")
+      .def_readonly("appearance_probability", &touch_result::appearance_probability,
+                    "Posterior of each appearance hypothesis (as photographed, inverted), or "
+                    "[1.0] for a fixed appearance.")
+      .def_readonly("log_prediction_support", &touch_result::log_prediction_support,
+                    "How much more probable the touch is under the prediction than under "
+                    "'anywhere on the map' (nats); 0 for a rejected frame.")
+      .def_readonly("log_marginal_likelihood", &touch_result::log_marginal_likelihood,
+                    "The touch's evidence log p(z_t | z_1..t-1); 0 for a rejected frame.")
+      .def_property_readonly(
+          "rejection",
+          [](const touch_result& r) { return choice_name(r.rejection, rejection_names); },
+          "Why the frame was rejected: 'none' when it was used, else 'weak_peak', "
+          "'weak_total' or 'flat'.")
+      .def_readonly("restarted", &touch_result::restarted,
+                    "The filter started again from a uniform belief at this touch.")
+      .def_readonly("touches", &touch_result::touches,
+                    "Touches used since construction or reset(), this one included.")
+      .def_property_readonly("accepted", &touch_result::accepted,
+                             "True when the frame was used (rejection == 'none').")
+      .def("__repr__", [](const touch_result& r) {
+        return std::string("TouchResult(verdict='") + to_string(r.verdict) + "', position_mm=(" +
+               number(r.position_mm.x()) + ", " + number(r.position_mm.y()) +
+               "), probability_within=" + number(r.probability_within) +
+               ", touches=" + std::to_string(r.touches) + ")";
+      });
+
+  // ---- Localizer ----
+  py::class_<py_localizer>(m, "Localizer", localizer_doc)
+      .def(py::init([](const py::object& map, double mm_per_px,
+                       std::optional<localizer_config> config,
+                       std::optional<taxel_geometry> sensor) {
+             image<float> img = to_image(map, "Localizer: map", "(rows, cols)");
+             const py::gil_scoped_release release;  // preparing the map takes a while
+             return std::make_unique<py_localizer>(std::move(img), mm_per_px,
+                                                   config.value_or(localizer_config{}),
+                                                   sensor.value_or(taxel_geometry{}));
+           }),
+           py::arg("map"), py::arg("mm_per_px"), py::arg("config") = py::none(),
+           py::arg("sensor") = py::none(),
+           "map: 2-D array of intensities (any range, any real dtype; row 0 at the top). "
+           "mm_per_px: the map's scale. config: a LocalizerConfig (None: the defaults). "
+           "sensor: a TaxelGeometry (None: 14 x 6 at 3.4 mm).\n\n"
+           "Raises TypeError or ValueError for a map that is not a 2-D real array, an empty or "
+           "non-finite map, a scale that is not a finite positive number, a map smaller than "
+           "the sensor's footprint, or an invalid configuration (each named with what was "
+           "expected).")
+      .def(
+          "touch",
+          [](py_localizer& self, const py::object& frame, const py::object& moved) {
+            tactile_frame f = frame_of(self.impl, frame, "Localizer.touch: frame");
+            const motion mv = motion_of(moved, "Localizer.touch: moved");
+            return locked(self, [&](localizer& loc) {
+              if (const auto* o = std::get_if<odometry>(&mv)) return loc.touch(f, *o);
+              if (const auto* s = std::get_if<sensor_odometry>(&mv)) return loc.touch(f, *s);
+              return loc.touch(f);
+            });
+          },
+          py::arg("frame"), py::arg("moved") = py::none(),
+          "One touch: preprocessing, prediction with `moved`, update with the frame; returns "
+          "a TouchResult.\n\n"
+          "frame: a Frame or a 2-D array of raw counts of shape (sensor.rows, sensor.cols).\n"
+          "moved: the motion since the previous call —\n"
+          "  None: no motion (the first touch of an exploration);\n"
+          "  (dx_mm, dy_mm): in the map's frame (known heading only: with headings > 0 the map "
+          "frame's motion is unknown, give the sensor-frame triple or use touch_at);\n"
+          "  (du_mm, dv_mm, dtheta_rad): in the sensor's own frame (u along its columns, v "
+          "along its rows) and its turn; with a known heading the turn must be 0.\n"
+          "The motion of the first call after construction or reset() is ignored: there is "
+          "nothing to move yet. A rejected frame (verdict 'rejected_frame') still applies the "
+          "motion.\n\n"
+          "Raises TypeError/ValueError for a frame of the wrong shape or dtype, NaN or negative "
+          "counts, or a motion that is not finite or does not fit the configuration.")
+      .def(
+          "touch_at",
+          [](py_localizer& self, const py::object& frame, double x_mm, double y_mm,
+             double theta_rad) {
+            tactile_frame f = frame_of(self.impl, frame, "Localizer.touch_at: frame");
+            return locked(self, [&](localizer& loc) {
+              return loc.touch_at(f, {.x_mm = x_mm, .y_mm = y_mm, .theta_rad = theta_rad});
+            });
+          },
+          py::arg("frame"), py::arg("x_mm"), py::arg("y_mm"), py::arg("theta_rad") = 0.0,
+          "A touch with the arm's pose (its own frame, mm and radians): the motion since the "
+          "previous touch_at becomes the odometry. With a known heading (headings = 0) the "
+          "arm's x and y axes must be parallel to the map's and the yaw may not change by "
+          "more than 5 degrees between touches; with unknown heading any frame will do, "
+          "because only motion relative to the sensor is used.")
+      .def(
+          "reset", [](py_localizer& self) { locked(self, [](localizer& loc) { loc.reset(); }); },
+          "Starts a new exploration on the same map: a uniform belief, no previous pose.")
+      .def(
+          "belief",
+          [](py_localizer& self) {
+            return to_numpy(locked(self, [](localizer& loc) { return loc.belief(); }));
+          },
+          "The belief over positions (summed over headings and appearances): a new float32 "
+          "array of shape `shape` (rows, cols), one value per position of the sensor's centre, "
+          "summing to 1. Element (r, c) is at position_mm(r, c); plot it with "
+          "matplotlib's imshow(belief, extent=loc.extent_mm).")
+      .def(
+          "heading_belief",
+          [](py_localizer& self) {
+            const auto layers = locked(self, [](localizer& loc) { return loc.heading_belief(); });
+            const auto [rows, cols] =
+                std::pair(self.impl.positions().rows(), self.impl.positions().cols());
+            return to_numpy(layers, rows, cols);
+          },
+          "The belief per heading (summed over appearances): a float32 array (headings, rows, "
+          "cols), layer k at heading_rad(k). Known heading: shape (1, rows, cols), belief().")
+      .def(
+          "heading_rad",
+          [](py_localizer& self, Eigen::Index k) {
+            const int n = std::max(1, self.impl.config().headings);
+            if (k < 0 || k >= n)
+              throw py::index_error("Localizer.heading_rad: layer " + std::to_string(k) +
+                                    "; expected 0 .. " + std::to_string(n - 1) +
+                                    " (the layers of heading_belief())");
+            return self.impl.heading_rad(k);
+          },
+          py::arg("k"), "The heading of layer k of heading_belief() (radians, map frame).")
+      .def_property_readonly(
+          "shape",
+          [](py_localizer& self) {
+            return py::make_tuple(self.impl.positions().rows(), self.impl.positions().cols());
+          },
+          "(rows, cols) of belief(): the sensor centre's candidate positions.")
+      .def(
+          "position_mm",
+          [](py_localizer& self, Eigen::Index row, Eigen::Index col) {
+            const planar_grid<float>& g = self.impl.positions();
+            if (row < 0 || row >= g.rows() || col < 0 || col >= g.cols())
+              throw py::index_error("Localizer.position_mm: (row, col) = (" + std::to_string(row) +
+                                    ", " + std::to_string(col) + "); expected 0 <= row < " +
+                                    std::to_string(g.rows()) + " and 0 <= col < " +
+                                    std::to_string(g.cols()) + " (the shape of belief())");
+            const auto p = g.state_mm(g.index({row, col}));
+            return vec2(p(0), p(1));
+          },
+          py::arg("row"), py::arg("col"),
+          "The map-frame position (mm, numpy (x, y)) of element (row, col) of belief(): the "
+          "sensor centre at that candidate position.")
+      .def_property_readonly(
+          "extent_mm", [](py_localizer& self) { return extent_of(self.impl); },
+          "(left, right, bottom, top) in mm: the edges of belief()'s pixels in the map frame, "
+          "for matplotlib's imshow(loc.belief(), extent=loc.extent_mm) (origin 'upper', the "
+          "default: y grows downwards, as on the map).")
+      .def_property_readonly(
+          "map_extent_mm",
+          [](py_localizer& self) {
+            const auto& map = self.impl.map();
+            const double mm = self.impl.mm_per_px();
+            return py::make_tuple(0.0, static_cast<double>(map.cols()) * mm,
+                                  static_cast<double>(map.rows()) * mm, 0.0);
+          },
+          "(left, right, bottom, top) in mm of the map image, for imshow(loc.map, "
+          "extent=loc.map_extent_mm).")
+      .def_property_readonly(
+          "touches",
+          [](py_localizer& self) {
+            return locked(self, [](localizer& loc) { return loc.touches(); });
+          },
+          "Touches used (accepted frames) since construction or reset().")
+      .def_property_readonly(
+          "window",
+          [](py_localizer& self) {
+            return py::make_tuple(self.impl.window().width, self.impl.window().height);
+          },
+          "The sensor's footprint on the map, px, as (width, height) (C++ pixel_size).")
+      .def_property_readonly(
+          "config", [](py_localizer& self) { return self.impl.config(); },
+          "The configuration (a copy), with preprocessing.mm_per_px set to the map's scale.")
+      .def_property_readonly(
+          "map", [](py_localizer& self) { return to_numpy(self.impl.map()); },
+          "The map (a float32 copy).")
+      .def_property_readonly(
+          "mm_per_px", [](py_localizer& self) { return self.impl.mm_per_px(); }, "The map's scale.")
+      .def_property_readonly(
+          "sensor", [](py_localizer& self) { return self.impl.sensor(); },
+          "The sensor's geometry (a TaxelGeometry copy).")
+      .def_property_readonly(
+          "headings", [](py_localizer& self) { return self.impl.config().headings; },
+          "0 when the heading is known, else the number of headings of the pose grid.")
+      .def("__repr__", [](py_localizer& self) {
+        const auto& map = self.impl.map();
+        return "Localizer(map " + std::to_string(map.rows()) + " x " + std::to_string(map.cols()) +
+               " px at " + number(self.impl.mm_per_px()) + " mm/px, config '" +
+               self.impl.config().name() + "', touches=" +
+               std::to_string(locked(self, [](localizer& loc) { return loc.touches(); })) + ")";
+      });
+}
+
+}  // namespace tacmap::python
