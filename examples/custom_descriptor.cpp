@@ -32,6 +32,8 @@ struct normalised_patch {
   tacmap::descriptor_field<float> compute(const tacmap::image<float>& img) const {
     if (img.rows() < side || img.cols() < side)
       throw std::invalid_argument("normalised_patch: image smaller than a 9 x 9 patch");
+    if (!img.allFinite())  // the concept's requirement 4: NaN is refused, not described
+      throw std::invalid_argument("normalised_patch: the image holds NaN or infinity");
     tacmap::descriptor_field<float> f;
     f.rows = img.rows() - side + 1;
     f.cols = img.cols() - side + 1;

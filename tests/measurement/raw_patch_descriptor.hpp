@@ -19,6 +19,8 @@ struct raw_patch_t {
     if (img.rows() < patch || img.cols() < patch)
       tacmap::detail::fail("raw_patch: image ", img.rows(), " x ", img.cols(),
                            " is smaller than the patch ", patch);
+    if (!img.allFinite())
+      tacmap::detail::fail("raw_patch: the image holds NaN or infinity; expected finite pixels");
     tacmap::descriptor_field<float> f;
     f.rows = img.rows() - patch + 1;
     f.cols = img.cols() - patch + 1;

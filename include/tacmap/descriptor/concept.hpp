@@ -3,6 +3,7 @@
 #pragma once
 
 #include <concepts>
+#include <vector>
 
 #include "tacmap/grid/concept.hpp"
 #include "tacmap/image.hpp"
@@ -45,7 +46,8 @@ struct descriptor_field {
 ///   using column = Eigen::Ref<const Eigen::Array<float, Eigen::Dynamic, 1>>;
 ///   Eigen::Index dimension() const { return 1; }
 ///   Eigen::Index patch_size() const { return 3; }
-///   descriptor_field<float> compute(const image<float>& img) const;  // 3 x 3 box means
+///   descriptor_field<float> compute(const image<float>& img) const;  // 3 x 3 box means;
+///                                        // throws on a small or non-finite image
 ///   float distance(column a, column b) const { return std::abs(a(0) - b(0)); }
 /// };
 /// ```
@@ -57,6 +59,43 @@ concept descriptor = belief_scalar<typename D::scalar_type> &&
   { d.patch_size() } -> std::same_as<Eigen::Index>;
   { d.compute(img) } -> std::same_as<descriptor_field<typename D::scalar_type>>;
   { d.distance(a, a) } -> std::same_as<typename D::scalar_type>;
+};
+
+/// Optional hooks. A `descriptor` may offer more; the library detects each with a concept below
+/// and takes a faster path when it is there, and `tacmap/testing/conformance.hpp` checks each
+/// one a type declares:
+///  H1. `static constexpr bool euclidean_distance = true;`: `distance(a, b)` IS the Euclidean
+///      norm of a - b. The measurement models then compute distances as whole-array dot
+///      products and never call `distance()`, so a type that declares it but measures something
+///      else would be silently wrong (the conformance suite compares the two).
+///  H2. `grid_spacing()` (`Eigen::Index` > 0) and `sample(img)` (a `.values` array with one
+///      column per patch whose top-left pixel is (i * spacing, j * spacing), row-major over that
+///      grid): the patches on the spacing grid only, each equal to `compute(img)`'s column there.
+///      The tactile side then describes only the patches it uses.
+///  H3. `contrast_permutation()` (with H1): a `std::vector<Eigen::Index>` p, an involution
+///      without fixed points, such that element i of the descriptor of the inverted image
+///      (max + min - img) is element p[i] of the image's (`dense_sift`: orientation channels
+///      turned by half a turn). `descriptor_likelihood_params::both_signs` then scores both
+///      contrast signs in one pass.
+template <class D>
+concept euclidean_descriptor = descriptor<D> && requires {
+  requires D::euclidean_distance;
+};
+
+/// H2 above.
+template <class D>
+concept samples_on_grid = descriptor<D> &&
+    requires(const D& d, const image<typename D::scalar_type>& img) {
+  { d.grid_spacing() } -> std::same_as<Eigen::Index>;
+  {
+    d.sample(img).values
+    } -> std::convertible_to<Eigen::Array<typename D::scalar_type, Eigen::Dynamic, Eigen::Dynamic>>;
+};
+
+/// H3 above.
+template <class D>
+concept contrast_symmetric_descriptor = euclidean_descriptor<D> && requires(const D& d) {
+  { d.contrast_permutation() } -> std::convertible_to<std::vector<Eigen::Index>>;
 };
 
 }  // namespace tacmap

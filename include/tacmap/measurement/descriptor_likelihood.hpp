@@ -148,34 +148,8 @@ struct descriptor_likelihood_params {
   }
 };
 
-/// Descriptors whose `distance` is the Euclidean norm opt into the vectorised whole-array
-/// distance path by declaring `static constexpr bool euclidean_distance = true;` (others are
-/// called through `distance()` once per pair).
-template <class D>
-concept euclidean_descriptor = descriptor<D> && requires {
-  requires D::euclidean_distance;
-};
-
-/// Descriptors that can also describe only the patches on their own spacing grid (top-left at
-/// multiples of `grid_spacing()`, row-major), as `dense_sift::sample` does: the tactile side then
-/// skips the positions it does not use. Column order must be row-major over that grid.
-template <class D>
-concept samples_on_grid = descriptor<D> &&
-    requires(const D& d, const image<typename D::scalar_type>& img) {
-  { d.grid_spacing() } -> std::same_as<Eigen::Index>;
-  {
-    d.sample(img).values
-    } -> std::convertible_to<Eigen::Array<typename D::scalar_type, Eigen::Dynamic, Eigen::Dynamic>>;
-};
-
-/// Descriptors that say what inverting an image's contrast does to their values: element i of
-/// the descriptor of (max + min - image) is element `contrast_permutation()[i]` of the image's
-/// (an involution without fixed points; `dense_sift`: orientation channels turned by half a
-/// turn). `descriptor_likelihood_params::both_signs` then matches both signs in one pass.
-template <class D>
-concept contrast_symmetric_descriptor = euclidean_descriptor<D> && requires(const D& d) {
-  { d.contrast_permutation() } -> std::convertible_to<std::vector<Eigen::Index>>;
-};
+// The optional descriptor hooks (euclidean_descriptor, samples_on_grid,
+// contrast_symmetric_descriptor) are in tacmap/descriptor/concept.hpp.
 
 namespace detail {
 

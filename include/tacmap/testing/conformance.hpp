@@ -10,8 +10,13 @@
 // constructible (its default configuration is what gets tested) and its patch is at most 18 px
 // (the paper's tactile window is 42 x 18 px). The suites check what the filter relies on:
 //  * compute() gives a field of dimension() x positions, finite on textured, flat and all-zero
-//    images, and rejects an image smaller than a patch with std::invalid_argument;
+//    images, and rejects an image smaller than a patch or holding NaN with
+//    std::invalid_argument;
 //  * distance(a, a) == 0, distance(a, b) == distance(b, a) >= 0, finite;
+//  * each optional hook the type declares (tacmap/descriptor/concept.hpp, H1-H3) keeps its
+//    promise: `euclidean_distance` -> distance() is the Euclidean norm; `sample()` -> compute()'s
+//    columns on the spacing grid, row-major; `contrast_permutation()` -> an involution without
+//    fixed points that maps the image's descriptors to the inverted image's;
 //  * plugged into `descriptor_likelihood` on the paper's grid, a measurement update leaves a
 //    finite, normalised posterior, and (aligned pairing) a tactile image cut from the map ranks
 //    within 5 mm of its window.
@@ -19,9 +24,12 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
+#include <vector>
 
 #include "tacmap/descriptor/concept.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
@@ -78,6 +86,73 @@ TEST_CASE_TEMPLATE_DEFINE("tacmap descriptor conformance", D, tacmap_descriptor_
     CHECK(d.compute(tacmap::image<T>::Zero(p + 2, p + 3)).values.allFinite());
     CHECK(d.compute(tacmap::image<T>::Constant(p + 2, p + 3, T(0.5))).values.allFinite());
     CHECK_THROWS_AS((void)d.compute(tacmap::image<T>::Zero(p - 1, p + 3)), std::invalid_argument);
+    // Requirement 4: NaN is refused, not described.
+    tacmap::image<T> with_nan = img;
+    with_nan(7, 5) = std::numeric_limits<T>::quiet_NaN();
+    CHECK_THROWS_AS((void)d.compute(with_nan), std::invalid_argument);
+  }
+
+  if constexpr (tacmap::euclidean_descriptor<D>) {
+    SUBCASE("H1: a descriptor that declares euclidean_distance measures the Euclidean norm") {
+      // The models never call distance() for such a type: it must agree with what they use.
+      const tacmap::image<T> img = tacmap::testing::conformance_image(30, 30, 4).template cast<T>();
+      const auto f = d.compute(img);
+      const Eigen::Index n = f.values.cols();
+      for (Eigen::Index i = 0; i < n; i += 13) {
+        const Eigen::Index j = (i * 5 + 7) % n;
+        const double norm =
+            (f.values.col(i) - f.values.col(j)).matrix().template cast<double>().norm();
+        CHECK(static_cast<double>(d.distance(f.values.col(i), f.values.col(j))) ==
+              doctest::Approx(norm).epsilon(1e-5));
+      }
+    }
+  }
+
+  if constexpr (tacmap::samples_on_grid<D>) {
+    SUBCASE("H2: sample() gives compute()'s columns on the spacing grid, row-major") {
+      const tacmap::image<T> img = tacmap::testing::conformance_image(42, 29, 5).template cast<T>();
+      const auto f = d.compute(img);
+      const auto s = d.sample(img);
+      const Eigen::Index spacing = d.grid_spacing();
+      REQUIRE(spacing > 0);
+      const Eigen::Index grid_rows = (f.rows - 1) / spacing + 1;
+      const Eigen::Index grid_cols = (f.cols - 1) / spacing + 1;
+      REQUIRE(s.values.rows() == d.dimension());
+      REQUIRE(s.values.cols() == grid_rows * grid_cols);
+      for (Eigen::Index i = 0; i < grid_rows; ++i)
+        for (Eigen::Index j = 0; j < grid_cols; ++j) {
+          CAPTURE(i);
+          CAPTURE(j);
+          const auto want = f.at(i * spacing, j * spacing);
+          const auto got = s.values.col(i * grid_cols + j);
+          CHECK(static_cast<double>((got - want).abs().maxCoeff()) <= 1e-5);
+        }
+    }
+  }
+
+  if constexpr (tacmap::contrast_symmetric_descriptor<D>) {
+    SUBCASE("H3: contrast_permutation() maps the image's descriptors to the inverted image's") {
+      const auto perm = d.contrast_permutation();
+      REQUIRE(static_cast<Eigen::Index>(perm.size()) == d.dimension());
+      for (std::size_t i = 0; i < perm.size(); ++i) {
+        REQUIRE(perm[i] >= 0);
+        REQUIRE(perm[i] < d.dimension());
+        CHECK(perm[i] != static_cast<Eigen::Index>(i));  // no fixed point
+        CHECK(perm[static_cast<std::size_t>(perm[i])] ==
+              static_cast<Eigen::Index>(i));  // involution
+      }
+      const tacmap::image<T> img = tacmap::testing::conformance_image(36, 31, 6).template cast<T>();
+      const tacmap::image<T> inverted = (img.maxCoeff() + img.minCoeff()) - img;
+      const auto f = d.compute(img);
+      const auto g = d.compute(inverted);
+      double worst = 0.0;
+      for (Eigen::Index k = 0; k < f.values.cols(); k += 11)
+        for (Eigen::Index i = 0; i < d.dimension(); ++i)
+          worst = std::max(
+              worst, std::abs(static_cast<double>(g.values(i, k) -
+                                                  f.values(perm[static_cast<std::size_t>(i)], k))));
+      CHECK(worst <= 1e-4);
+    }
   }
 
   SUBCASE("distance is zero on itself, symmetric, finite and non-negative") {
