@@ -64,6 +64,37 @@ template <class Derived>
 
 }  // namespace detail
 
+namespace detail {
+
+/// Bilinear resampling of `src` to `rows` x `cols` over the same extent: output pixel centres
+/// mapped onto source pixel centres, the border pixels extended. Shared by `rescale`
+/// (enlarging a map) and `preprocess` (taxels to map pixels).
+inline image<float> resize_bilinear(const image<float>& src, Eigen::Index rows, Eigen::Index cols) {
+  const double sy = static_cast<double>(src.rows()) / static_cast<double>(rows);
+  const double sx = static_cast<double>(src.cols()) / static_cast<double>(cols);
+  const auto last_row = static_cast<double>(src.rows() - 1);
+  const auto last_col = static_cast<double>(src.cols() - 1);
+  image<float> out(rows, cols);
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    const double v = std::clamp((static_cast<double>(r) + 0.5) * sy - 0.5, 0.0, last_row);
+    const auto r0 = static_cast<Eigen::Index>(std::floor(v));
+    const Eigen::Index r1 = std::min(r0 + 1, src.rows() - 1);
+    const double fy = v - static_cast<double>(r0);
+    for (Eigen::Index c = 0; c < cols; ++c) {
+      const double u = std::clamp((static_cast<double>(c) + 0.5) * sx - 0.5, 0.0, last_col);
+      const auto c0 = static_cast<Eigen::Index>(std::floor(u));
+      const Eigen::Index c1 = std::min(c0 + 1, src.cols() - 1);
+      const double fx = u - static_cast<double>(c0);
+      const double top = (1 - fx) * src(r0, c0) + fx * src(r0, c1);
+      const double bottom = (1 - fx) * src(r1, c0) + fx * src(r1, c1);
+      out(r, c) = static_cast<float>((1 - fy) * top + fy * bottom);
+    }
+  }
+  return out;
+}
+
+}  // namespace detail
+
 /// Area-average resize of `src` to `rows` x `cols`: each output pixel is the mean of the source
 /// area it covers, partly covered source pixels weighted by their overlap. Shrinking therefore
 /// does not alias, and the image's mean is kept. Enlarging with it repeats source pixels (blocky:
@@ -144,31 +175,7 @@ template <class Derived>
   const auto cols = static_cast<Eigen::Index>(cols_out);
   if (rows == src.rows() && cols == src.cols()) return src;
   if (factor < 1.0) return resize_area(src, rows, cols);
-  // Bilinear: output pixel centres mapped onto source pixel centres over the same extent.
-  const double sy = static_cast<double>(src.rows()) / static_cast<double>(rows);
-  const double sx = static_cast<double>(src.cols()) / static_cast<double>(cols);
-  const auto last_row = static_cast<double>(src.rows() - 1);
-  const auto last_col = static_cast<double>(src.cols() - 1);
-  image<float> out(rows, cols);
-  for (Eigen::Index r = 0; r < rows; ++r) {
-    const double v = std::clamp((static_cast<double>(r) + 0.5) * sy - 0.5, 0.0, last_row);
-    const auto r0 = static_cast<Eigen::Index>(std::floor(v));
-    const Eigen::Index r1 = std::min(r0 + 1, src.rows() - 1);
-    const double fy = v - static_cast<double>(r0);
-    for (Eigen::Index c = 0; c < cols; ++c) {
-      const double u = std::clamp((static_cast<double>(c) + 0.5) * sx - 0.5, 0.0, last_col);
-      const auto c0 = static_cast<Eigen::Index>(std::floor(u));
-      const Eigen::Index c1 = std::min(c0 + 1, src.cols() - 1);
-      const double fx = u - static_cast<double>(c0);
-      const auto at = [&](Eigen::Index y, Eigen::Index x) {
-        return static_cast<double>(src(y, x));
-      };
-      const double top = (1 - fx) * at(r0, c0) + fx * at(r0, c1);
-      const double bottom = (1 - fx) * at(r1, c0) + fx * at(r1, c1);
-      out(r, c) = static_cast<float>((1 - fy) * top + fy * bottom);
-    }
-  }
-  return out;
+  return detail::resize_bilinear(src, rows, cols);
 }
 
 }  // namespace tacmap

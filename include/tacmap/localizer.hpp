@@ -550,7 +550,8 @@ class localizer {
         mm_per_px_(mm_per_px),
         config_(std::move(config)),
         sensor_(sensor),
-        window_(checked_window(map_, mm_per_px_, sensor_)) {
+        window_(
+            checked_tactile_window(sensor_, mm_per_px_, {map_.cols(), map_.rows()}, "localizer")) {
     config_.validate();
     config_.preprocessing.mm_per_px = mm_per_px_;
     if (config_.headings == 0)
@@ -769,20 +770,6 @@ class localizer {
       detail::fail("localizer: mm_per_px = ", mm_per_px,
                    "; expected the map's scale, a finite value > 0 millimetres per pixel");
     return map;
-  }
-
-  static pixel_size checked_window(const image<float>& map, double mm_per_px,
-                                   const taxel_geometry& sensor) {
-    const pixel_size w = tactile_window(sensor, mm_per_px);
-    if (w.width < 1 || w.height < 1)
-      detail::fail("localizer: a ", sensor.rows, " x ", sensor.cols, " array at ", sensor.pitch_mm,
-                   " mm covers less than one pixel at ", mm_per_px,
-                   " mm per px; expected a map scale finer than the array's pitch");
-    if (map.cols() < w.width || map.rows() < w.height)
-      detail::fail("localizer: the map is ", map.cols(), " x ", map.rows(),
-                   " px (width x height) but the sensor covers ", w.width, " x ", w.height,
-                   " px at ", mm_per_px, " mm per px; expected a map at least the sensor's size");
-    return w;
   }
 
   image<float> map_;

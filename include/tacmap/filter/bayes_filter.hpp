@@ -75,7 +75,7 @@ struct update_report {
   /// matches, negative when the touch fits somewhere the filter did not expect better than
   /// where it did: the signal that odometry, a slip or a kidnap broke the prediction. Unlike
   /// `log_evidence` it needs no reference level: it is a ratio of two evidences of one touch
-  /// (`doubt_params` in filter/confidence.hpp turns it into a verdict).
+  /// (`confidence_params::contradiction` in filter/confidence.hpp turns it into a verdict).
   double log_prediction_support = 0.0;
 };
 

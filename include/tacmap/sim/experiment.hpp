@@ -119,7 +119,7 @@ struct touch_record {
   double probability_within = 0.0;
   /// Pose grids: the belief's P(|heading - MAP heading| <= 15 degrees); 1 for known headings.
   double heading_probability = 1.0;
-  /// The verdict from those probabilities (`confidence_params` defaults).
+  /// The verdict from those probabilities (`localizer_config::confidence`).
   tacmap::verdict verdict = tacmap::verdict::uncertain;
   /// This touch's evidence log p(z_t | z_1..t-1) in the model's units
   /// (`update_report::log_marginal_likelihood`); 0 for a rejected frame.
@@ -127,7 +127,7 @@ struct touch_record {
   /// This touch's `update_report::log_prediction_support` (0 for a rejected frame): below
   /// `confidence_params::contradiction` the touch contradicts the prediction.
   double log_prediction_support = 0.0;
-  /// log_prediction_support < confidence_params{}.contradiction: the verdict a robot would get
+  /// log_prediction_support < config.confidence.contradiction: the verdict a robot would get
   /// is `contradicted` (`verdict` above keeps the belief's own, for its calibration).
   bool contradicted = false;
 };
@@ -215,7 +215,8 @@ class localization_experiment {
   localization_experiment(const touch_protocol& protocol, localization_config config)
       : protocol_(&protocol),
         config_(std::move(config)),
-        window_(checked_window(protocol, config_)),
+        window_(checked_tactile_window(config_.simulator.geometry, protocol.mm_per_px,
+                                       protocol.map_size(), "localization_experiment")),
         margin_px_(config_.scenario.moves_sensor() || config_.random_orientation
                        ? margin_px(protocol, config_)
                        : 0) {
@@ -418,12 +419,12 @@ class localization_experiment {
         }
         rec.log_marginal_likelihood = report.log_marginal_likelihood();
         rec.log_prediction_support = report.log_prediction_support;
-        rec.contradicted = report.log_prediction_support < confidence_params{}.contradiction;
+        rec.contradicted = report.log_prediction_support < config_.confidence.contradiction;
       } else if (keep_log_likelihoods) {
         result.log_likelihoods.emplace_back();
       }
       const auto est = filter.estimate();
-      const confidence conf = assess(filter, est);
+      const confidence conf = assess(filter, est, config_.confidence);
       rec.probability_within = conf.probability_within;
       rec.heading_probability = conf.heading_probability;
       rec.verdict = conf.verdict;
@@ -444,15 +445,6 @@ class localization_experiment {
       }
     }
     return result;
-  }
-
-  static pixel_size checked_window(const touch_protocol& p, const localization_config& c) {
-    const pixel_size w = tactile_window(c.simulator.geometry, p.mm_per_px);
-    if (p.map.cols() < w.width || p.map.rows() < w.height)
-      detail::fail("localization_experiment: the map is ", p.map.cols(), " x ", p.map.rows(),
-                   " px (width x height) but the sensor covers ", w.width, " x ", w.height,
-                   " px at ", p.mm_per_px, " mm per px; expected a map at least the sensor's size");
-    return w;
   }
 
   // Seeds of the scenario's draws: stream 0 for the camera map, index + 1 for sequence index;

@@ -102,38 +102,43 @@ struct preprocessed_frame {
   return {.width = side(geometry.cols), .height = side(geometry.rows)};
 }
 
+/// `tactile_window`, checked against the map it must fit on: throws std::invalid_argument
+/// (messages start with `who`) when the array covers less than a pixel or the map is smaller
+/// than the sensor's footprint.
+[[nodiscard]] inline pixel_size checked_tactile_window(const taxel_geometry& geometry,
+                                                       double mm_per_px, pixel_size map,
+                                                       const char* who) {
+  const pixel_size w = tactile_window(geometry, mm_per_px);
+  if (w.width < 1 || w.height < 1)
+    detail::fail(who, ": a ", geometry.rows, " x ", geometry.cols, " array at ", geometry.pitch_mm,
+                 " mm covers less than one pixel at ", mm_per_px,
+                 " mm per px; expected a map scale finer than the array's pitch");
+  if (map.width < w.width || map.height < w.height)
+    detail::fail(who, ": the map is ", map.width, " x ", map.height,
+                 " px (width x height) but the sensor covers ", w.width, " x ", w.height, " px at ",
+                 mm_per_px, " mm per px; expected a map at least the sensor's size");
+  return w;
+}
+
 namespace detail {
 
 // Resamples `src` (taxels) to `out_rows x out_cols` pixels. Pixel centres and taxel centres are
 // aligned on the physical extent of the array, so the image is neither shifted nor stretched.
 inline image<float> resize_taxels(const image<float>& src, Eigen::Index out_rows,
                                   Eigen::Index out_cols, resize_method method) {
+  if (method == resize_method::bilinear) return resize_bilinear(src, out_rows, out_cols);
   image<float> out(out_rows, out_cols);
   const double sy = static_cast<double>(src.rows()) / static_cast<double>(out_rows);
   const double sx = static_cast<double>(src.cols()) / static_cast<double>(out_cols);
   for (Eigen::Index r = 0; r < out_rows; ++r) {
     const double v = (static_cast<double>(r) + 0.5) * sy - 0.5;  // taxel row coordinate
+    const auto tr =
+        std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::lround(v)), 0, src.rows() - 1);
     for (Eigen::Index c = 0; c < out_cols; ++c) {
       const double u = (static_cast<double>(c) + 0.5) * sx - 0.5;
-      if (method == resize_method::nearest) {
-        const auto tr =
-            std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::lround(v)), 0, src.rows() - 1);
-        const auto tc =
-            std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::lround(u)), 0, src.cols() - 1);
-        out(r, c) = src(tr, tc);
-        continue;
-      }
-      const double vc = std::clamp(v, 0.0, static_cast<double>(src.rows() - 1));
-      const double uc = std::clamp(u, 0.0, static_cast<double>(src.cols() - 1));
-      const auto r0 = static_cast<Eigen::Index>(std::floor(vc));
-      const auto c0 = static_cast<Eigen::Index>(std::floor(uc));
-      const Eigen::Index r1 = std::min(r0 + 1, src.rows() - 1);
-      const Eigen::Index c1 = std::min(c0 + 1, src.cols() - 1);
-      const double fy = vc - static_cast<double>(r0);
-      const double fx = uc - static_cast<double>(c0);
-      const double top = (1 - fx) * src(r0, c0) + fx * src(r0, c1);
-      const double bottom = (1 - fx) * src(r1, c0) + fx * src(r1, c1);
-      out(r, c) = static_cast<float>((1 - fy) * top + fy * bottom);
+      const auto tc =
+          std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::lround(u)), 0, src.cols() - 1);
+      out(r, c) = src(tr, tc);
     }
   }
   return out;
