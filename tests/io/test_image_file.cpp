@@ -1,41 +1,23 @@
 // Maps from ordinary images (io/image_file.hpp): PNG (grey, colour, 16-bit), JPEG and PGM decoded
 // to the intensities that went in, broken files refused with their name; and the core's
 // resize_area and rescale (image.hpp). Test images are written in memory: PNG by tacmap's own
-// writers or stb_image_write (colour with alpha), JPEG by stb_image_write, 16-bit PNG by hand.
+// writers or stb_image_write (colour with alpha), JPEG by stb_image_write, 16-bit PNG by hand. And
+// the compressed PNG writer (encode_png_compressed): stb_image decodes its output to the very
+// bytes that went in, in a fraction of the uncompressed encoder's size.
 #include <doctest/doctest.h>
 
 #include "tacmap/io/image_file.hpp"
 #include "tacmap/io/png_rgb.hpp"
 #include "test_support.hpp"
 
-// stb_image_write, for the test images only: a private copy in this translation unit.
-#define STB_IMAGE_WRITE_STATIC
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wconversion"
-#pragma GCC diagnostic ignored "-Wsign-conversion"
-#pragma GCC diagnostic ignored "-Wold-style-cast"
-#pragma GCC diagnostic ignored "-Wunused-function"
-#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
-#pragma GCC diagnostic ignored "-Wuseless-cast"
-#pragma GCC diagnostic ignored "-Wdouble-promotion"
-#pragma GCC diagnostic ignored "-Wshadow"
-#elif defined(__clang__)
-#pragma clang diagnostic push
-#pragma clang diagnostic ignored "-Weverything"
-#endif
-#include <stb/stb_image_write.h>
-#if defined(__clang__)
-#pragma clang diagnostic pop
-#elif defined(__GNUC__)
-#pragma GCC diagnostic pop
-#endif
+// stb_image_write (test images: colour with alpha, JPEG) is the private copy that image_file.hpp
+// compiles into this translation unit for its compressed writer.
 
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <random>
 #include <span>
 #include <string>
@@ -161,6 +143,69 @@ TEST_CASE("image_file: colour becomes grey with BT.601 weights (stb's 77, 150, 2
   const image<float> from_rgba = tacmap::load_image(as_bytes(stb_png(2, 1, 4, rgba)), "rgba.png");
   CHECK(from_rgba(0, 0) == 76.0F / 255.0F);
   CHECK(from_rgba(0, 1) == 149.0F / 255.0F);
+}
+
+TEST_CASE("image_file: a compressed colour PNG decodes to the same pixels, much smaller") {
+  // A figure-like image: flat background, a gradient panel, a few lines and a noisy corner.
+  const Eigen::Index rows = 90, cols = 130;
+  tacmap::rgb_image img = tacmap::rgb_image::filled(rows, cols, 1.0F, 1.0F, 1.0F);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> unit(0.0F, 1.0F);
+  for (Eigen::Index r = 10; r < 60; ++r)
+    for (Eigen::Index c = 10; c < 70; ++c)
+      img.set(r, c, static_cast<float>(r) / 60.0F, static_cast<float>(c) / 70.0F, 0.3F);
+  for (Eigen::Index c = 0; c < cols; ++c) img.set(75, c, 0.9F, 0.1F, 0.1F);
+  for (Eigen::Index r = 70; r < rows; ++r)
+    for (Eigen::Index c = 110; c < cols; ++c) img.set(r, c, unit(rng), unit(rng), unit(rng));
+  const std::string png = tacmap::encode_png_compressed(img);
+  const std::string stored = tacmap::encode_png_rgb(img);
+  CHECK(png.size() * 3 < stored.size());
+  int width = 0, height = 0, channels = 0;
+  std::unique_ptr<stbi_uc, void (*)(void*)> px(
+      stbi_load_from_memory(as_bytes(png).data(), static_cast<int>(png.size()), &width, &height,
+                            &channels, 3),
+      stbi_image_free);
+  REQUIRE(px != nullptr);
+  REQUIRE(width == cols);
+  REQUIRE(height == rows);
+  CHECK(channels == 3);
+  int wrong = 0;
+  for (Eigen::Index r = 0; r < rows; ++r)
+    for (Eigen::Index c = 0; c < cols; ++c) {
+      const std::size_t i = static_cast<std::size_t>(3 * (r * cols + c));
+      const auto byte = [](float v) { return tacmap::detail::image_io::to_byte(v); };
+      wrong += px.get()[i] != byte(img.r(r, c)) || px.get()[i + 1] != byte(img.g(r, c)) ||
+               px.get()[i + 2] != byte(img.b(r, c));
+    }
+  CHECK(wrong == 0);
+  // And through a file, as the demo writes its figures.
+  const fs::path file = fs::temp_directory_path() / "tacmap_test_compressed_rgb.png";
+  tacmap::write_png_compressed(file, img);
+  CHECK(fs::file_size(file) == png.size());
+  fs::remove(file);
+}
+
+TEST_CASE("image_file: a compressed grey PNG reads back exactly; bad images are refused") {
+  image<float> img(33, 47);
+  for (Eigen::Index r = 0; r < img.rows(); ++r)
+    for (Eigen::Index c = 0; c < img.cols(); ++c)
+      img(r, c) = static_cast<float>((r * 7 + c * 3) % 256) / 255.0F;
+  const std::string png = tacmap::encode_png_compressed(img);
+  CHECK(png.size() < tacmap::encode_png(img).size());
+  const image<float> back = tacmap::load_image(as_bytes(png), "grey.png");
+  REQUIRE(back.rows() == img.rows());
+  REQUIRE(back.cols() == img.cols());
+  CHECK((back - img).abs().maxCoeff() < 1e-6F);
+
+  tacmap::rgb_image bad = tacmap::rgb_image::filled(4, 4, 0.5F, 0.5F, 0.5F);
+  bad.g = image<float>::Constant(4, 5, 0.5F);
+  CHECK(contains(message_of([&] { (void)tacmap::encode_png_compressed(bad); }),
+                 "encode_png_compressed: channel sizes differ"));
+  img(2, 3) = std::nanf("");
+  CHECK(contains(message_of([&] { (void)tacmap::encode_png_compressed(img); }),
+                 "pixel (row 2, col 3) is nan"));
+  CHECK(contains(message_of([&] { (void)tacmap::encode_png_compressed(image<float>()); }),
+                 "expected a non-empty image"));
 }
 
 TEST_CASE("image_file: a 16-bit PNG keeps its 16 bits") {

@@ -1,5 +1,6 @@
 // tacmap: maps from ordinary image files — PNG and JPEG (grey or colour) through stb_image, and
-// binary PGM through tacmap's own reader (io/image_io.hpp).
+// binary PGM through tacmap's own reader (io/image_io.hpp); compressed PNG output for figures
+// (`encode_png_compressed`, `write_png_compressed`) through stb_image_write.
 //
 // Optional: the one tacmap header with an image-format dependency, stb_image (Debian
 // libstb-dev). tacmap/tacmap.hpp does not include it; link the CMake target tacmap::image_file
@@ -18,6 +19,13 @@
 // stb_image.h before this header is refused at compile time (the two would clash), and
 // compiling stb's implementation again after it in the same translation unit fails.
 //
+// stb_image_write (the compressed PNG writer) is compiled the same way: a private copy per
+// translation unit (STB_IMAGE_WRITE_STATIC), or yours when TACMAP_STB_IMAGE_WRITE_EXTERNAL is
+// defined (one .c/.cpp of your program with STB_IMAGE_WRITE_IMPLEMENTATION); including
+// stb_image_write.h before this header without that macro is refused at compile time. Why not
+// in io/png_rgb.hpp: that header is dependency-free by design (stored, uncompressed deflate);
+// the compressed writer lives where stb already is.
+//
 // Why PGM does not go through stb: stb's PNM reader ignores maxval (a 10-bit PGM reads as dark)
 // and reads a truncated file as if whole; decode_pgm scales by maxval and refuses truncation.
 #pragma once
@@ -27,6 +35,11 @@
     "tacmap/io/image_file.hpp: stb_image.h was included before it. Define TACMAP_STB_IMAGE_EXTERNAL before including tacmap/io/image_file.hpp to use your own stb_image (compiled once in your program), or include tacmap's header first and do not compile stb_image yourself."
 #endif
 
+#if !defined(TACMAP_STB_IMAGE_WRITE_EXTERNAL) && defined(INCLUDE_STB_IMAGE_WRITE_H)
+#error \
+    "tacmap/io/image_file.hpp: stb_image_write.h was included before it. Define TACMAP_STB_IMAGE_WRITE_EXTERNAL before including tacmap/io/image_file.hpp to use your own stb_image_write (compiled once in your program), or include tacmap's header first and use its copy."
+#endif
+
 #if !defined(TACMAP_STB_IMAGE_EXTERNAL)
 #define STB_IMAGE_STATIC
 #define STB_IMAGE_IMPLEMENTATION
@@ -34,6 +47,10 @@
 #define STBI_ONLY_JPEG
 #define STBI_NO_HDR
 #define STBI_NO_LINEAR
+#endif
+#if !defined(TACMAP_STB_IMAGE_WRITE_EXTERNAL)
+#define STB_IMAGE_WRITE_STATIC
+#define STB_IMAGE_WRITE_IMPLEMENTATION
 #endif
 // stb is C written for brevity: its warnings are not ours to fix, and must not reach the
 // consumer's build (whose flags we do not know), so they are silenced for the include only.
@@ -70,6 +87,16 @@
 #error \
     "tacmap/io/image_file.hpp needs stb_image.h (Debian: apt install libstb-dev); link the CMake target tacmap::image_file or add stb's folder to the include path."
 #endif
+#if defined(INCLUDE_STB_IMAGE_WRITE_H)
+// TACMAP_STB_IMAGE_WRITE_EXTERNAL, stb_image_write already included (see above).
+#elif __has_include(<stb/stb_image_write.h>)
+#include <stb/stb_image_write.h>
+#elif __has_include(<stb_image_write.h>)
+#include <stb_image_write.h>
+#else
+#error \
+    "tacmap/io/image_file.hpp needs stb_image_write.h (Debian: apt install libstb-dev); link the CMake target tacmap::image_file or add stb's folder to the include path."
+#endif
 #if defined(__clang__)
 #pragma clang diagnostic pop
 #elif defined(__GNUC__)
@@ -86,6 +113,10 @@
 #undef STBI_NO_HDR
 #undef STBI_NO_LINEAR
 #endif
+#if !defined(TACMAP_STB_IMAGE_WRITE_EXTERNAL)
+#undef STB_IMAGE_WRITE_STATIC
+#undef STB_IMAGE_WRITE_IMPLEMENTATION
+#endif
 
 #include <climits>
 #include <cstddef>
@@ -96,9 +127,11 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "tacmap/image.hpp"
 #include "tacmap/io/image_io.hpp"
+#include "tacmap/io/png_rgb.hpp"
 
 namespace tacmap {
 
@@ -145,6 +178,26 @@ inline const char* name_of(format f) { return f == format::png ? "PNG" : "JPEG";
 inline const char* stb_reason() {
   const char* reason = stbi_failure_reason();
   return reason != nullptr ? reason : "no reason given";
+}
+
+/// PNG bytes of `channels`-interleaved 8-bit `pixels` through stb_image_write (zlib-style
+/// deflate at stb's level 8 with per-row filters).
+inline std::string encode_png_stb(const std::vector<std::uint8_t>& pixels, Eigen::Index width,
+                                  Eigen::Index height, int channels, const char* who) {
+  if (width > INT_MAX / channels || height > INT_MAX)
+    detail::fail(who, ": the image is ", height, " x ", width,
+                 " px (rows x cols); stb_image_write writes at most ", INT_MAX / channels,
+                 " px per row — write it with tacmap's uncompressed encode_png / encode_png_rgb");
+  std::string out;
+  const auto append = [](void* context, void* data, int size) {
+    static_cast<std::string*>(context)->append(static_cast<const char*>(data),
+                                               static_cast<std::size_t>(size));
+  };
+  if (stbi_write_png_to_func(append, &out, static_cast<int>(width), static_cast<int>(height),
+                             channels, pixels.data(), static_cast<int>(width) * channels) == 0)
+    detail::fail(who, ": stb_image_write could not encode the ", height, " x ", width,
+                 " px image (out of memory?)");
+  return out;
 }
 
 }  // namespace detail::image_file
@@ -221,6 +274,49 @@ inline const char* stb_reason() {
   return load_image(std::span<const std::uint8_t>(
                         reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()),
                     path.string());
+}
+
+/// Compressed 8-bit RGB PNG bytes of `img` (deflate through stb_image_write; the same pixels as
+/// the dependency-free `encode_png_rgb` of io/png_rgb.hpp, a fraction of its size: figures with
+/// flat areas shrink 10-50x). Throws std::invalid_argument when the channels differ in size, are
+/// empty or hold non-finite values (values outside [0, 1] are clamped).
+[[nodiscard]] inline std::string encode_png_compressed(const rgb_image& img) {
+  detail::image_io::check_writable_rgb(img, "encode_png_compressed");
+  std::vector<std::uint8_t> pixels;
+  pixels.reserve(static_cast<std::size_t>(3 * img.rows() * img.cols()));
+  for (Eigen::Index row = 0; row < img.rows(); ++row)
+    for (Eigen::Index col = 0; col < img.cols(); ++col) {
+      pixels.push_back(detail::image_io::to_byte(img.r(row, col)));
+      pixels.push_back(detail::image_io::to_byte(img.g(row, col)));
+      pixels.push_back(detail::image_io::to_byte(img.b(row, col)));
+    }
+  return detail::image_file::encode_png_stb(pixels, img.cols(), img.rows(), 3,
+                                            "encode_png_compressed");
+}
+
+/// Compressed 8-bit grey PNG bytes of `img` (intensities in [0, 1]; as `encode_png` of
+/// io/image_io.hpp, compressed). Throws std::invalid_argument when `img` is empty or holds
+/// non-finite values.
+[[nodiscard]] inline std::string encode_png_compressed(const image<float>& img) {
+  detail::image_io::check_writable(img, "encode_png_compressed");
+  std::vector<std::uint8_t> pixels;
+  pixels.reserve(static_cast<std::size_t>(img.size()));
+  for (Eigen::Index row = 0; row < img.rows(); ++row)
+    for (Eigen::Index col = 0; col < img.cols(); ++col)
+      pixels.push_back(detail::image_io::to_byte(img(row, col)));
+  return detail::image_file::encode_png_stb(pixels, img.cols(), img.rows(), 1,
+                                            "encode_png_compressed");
+}
+
+/// Writes `img` as a compressed PNG (see `encode_png_compressed`); std::runtime_error when the
+/// file cannot be written.
+inline void write_png_compressed(const std::filesystem::path& path, const rgb_image& img) {
+  detail::image_io::write_file(path, encode_png_compressed(img), "write_png_compressed");
+}
+
+/// Writes the grey `img` as a compressed PNG (see `encode_png_compressed`).
+inline void write_png_compressed(const std::filesystem::path& path, const image<float>& img) {
+  detail::image_io::write_file(path, encode_png_compressed(img), "write_png_compressed");
 }
 
 }  // namespace tacmap

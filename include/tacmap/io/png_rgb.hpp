@@ -1,7 +1,10 @@
 // tacmap: colour PNG output for figures (demo, evaluation): `rgb_image` and `write_png_rgb`.
 //
 // Same encoder as io/image_io.hpp's grey `encode_png` (stored deflate blocks, no compression,
-// no dependency), with three 8-bit channels (PNG colour type 2).
+// no dependency), with three 8-bit channels (PNG colour type 2): a figure of W x H px takes
+// 3 W H bytes. Compressed PNG (typically 10-50x smaller for figures) is in the optional
+// tacmap/io/image_file.hpp (`encode_png_compressed`, `write_png_compressed`, through
+// stb_image_write; CMake target tacmap::image_file), so that this header stays dependency-free.
 #pragma once
 
 #include <algorithm>
@@ -37,18 +40,28 @@ struct rgb_image {
   }
 };
 
+namespace detail::image_io {
+
+/// Refuses an `rgb_image` that cannot be written (channels of different sizes, empty, or holding
+/// non-finite values); `who` names the caller in the message.
+inline void check_writable_rgb(const rgb_image& img, const char* who) {
+  if (img.g.rows() != img.r.rows() || img.g.cols() != img.r.cols() ||
+      img.b.rows() != img.r.rows() || img.b.cols() != img.r.cols())
+    detail::fail(who, ": channel sizes differ (red ", img.r.rows(), " x ", img.r.cols(), ", green ",
+                 img.g.rows(), " x ", img.g.cols(), ", blue ", img.b.rows(), " x ", img.b.cols(),
+                 "); expected three channels of the same size");
+  check_writable(img.r, (std::string(who) + " (red)").c_str());
+  check_writable(img.g, (std::string(who) + " (green)").c_str());
+  check_writable(img.b, (std::string(who) + " (blue)").c_str());
+}
+
+}  // namespace detail::image_io
+
 /// 8-bit RGB PNG bytes of `img`. Throws std::invalid_argument when the channels differ in size,
 /// are empty or hold non-finite values (values outside [0, 1] are clamped).
 [[nodiscard]] inline std::string encode_png_rgb(const rgb_image& img) {
   using detail::image_io::to_byte;
-  if (img.g.rows() != img.r.rows() || img.g.cols() != img.r.cols() ||
-      img.b.rows() != img.r.rows() || img.b.cols() != img.r.cols())
-    detail::fail("encode_png_rgb: channel sizes differ (red ", img.r.rows(), " x ", img.r.cols(),
-                 ", green ", img.g.rows(), " x ", img.g.cols(), ", blue ", img.b.rows(), " x ",
-                 img.b.cols(), "); expected three channels of the same size");
-  detail::image_io::check_writable(img.r, "encode_png_rgb (red)");
-  detail::image_io::check_writable(img.g, "encode_png_rgb (green)");
-  detail::image_io::check_writable(img.b, "encode_png_rgb (blue)");
+  detail::image_io::check_writable_rgb(img, "encode_png_rgb");
   std::string raw;
   raw.reserve(static_cast<std::size_t>(img.rows() * (3 * img.cols() + 1)));
   for (Eigen::Index row = 0; row < img.rows(); ++row) {
