@@ -168,8 +168,8 @@ struct localizer_config {
     return wide_probability.value_or(headings > 0 ? 0.0 : default_wide_probability);
   }
 
-  /// The paper's configuration (Sec. III-C, IV): SIFT-lite, every patch against every patch
-  /// (eq. (1)), the inverse likelihood (eq. (2)), per-window features, a fixed appearance
+  /// The paper's configuration (Sec.\ III-C, IV): SIFT-lite, every patch against every patch
+  /// (eq.\ (1)), the inverse likelihood (eq.\ (2)), per-window features, a fixed appearance
   /// (raised parts bright) and the Gaussian motion model without a floor.
   [[nodiscard]] static localizer_config paper() {
     localizer_config c;

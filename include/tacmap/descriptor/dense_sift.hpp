@@ -68,7 +68,7 @@ struct descriptor_samples {
 };
 
 /// Dense SIFT with `NumBins` x `NumBins` spatial bins and `NumAngles` orientations: Lazebnik's
-/// dense SIFT, as named by the paper's parameters (Sec. III-C; reference/dense-sift.md).
+/// dense SIFT, as named by the paper's parameters (Sec.\ III-C; reference/dense-sift.md).
 ///
 /// **Pipeline** (on the whole image, never per patch):
 ///  1. The image is divided by its maximum (by its largest magnitude if it has negative values,
@@ -202,8 +202,9 @@ class dense_sift {
   }
 
   /// Descriptors of every patch position at stride 1 (the `descriptor` concept's member): column
-  /// r * cols + c is the patch with top-left pixel (r, c); rows = H - patch + 1, cols = W - patch
-  /// + 1. Throws `std::invalid_argument` when `img` is smaller than a patch or not finite.
+  /// r * cols + c is the patch with top-left pixel (r, c); rows = H - patch + 1,
+  /// cols = W - patch + 1. Throws `std::invalid_argument` when `img` is smaller than a patch or
+  /// not finite.
   [[nodiscard]] descriptor_field<T> compute(const image_view<T>& img) const {
     check_image(img, "compute");
     const Eigen::Index h = img.rows();
@@ -248,7 +249,7 @@ class dense_sift {
     return {(size.width - p) / s + 1, (size.height - p) / s + 1};
   }
 
-  /// Descriptors of the patches on the grid_spacing grid (Sec. III-C: a tactile image gives
+  /// Descriptors of the patches on the grid_spacing grid (Sec.\ III-C: a tactile image gives
   /// "three overlapped sub-images", one descriptor each). Grid point (i, j) is the patch with
   /// top-left (i * grid_spacing, j * grid_spacing); see `descriptor_samples`. Only the pooled
   /// values those patches need are computed. Throws `std::invalid_argument` when the image is
@@ -377,7 +378,7 @@ class dense_sift {
     return out;
   }
 
-  /// Euclidean distance between two descriptors (the paper's eq. (1) sums these). Throws
+  /// Euclidean distance between two descriptors (the paper's eq.\ (1) sums these). Throws
   /// `std::invalid_argument` when a column's length is not `dimension()`.
   [[nodiscard]] T distance(column a, column b) const {
     if (a.size() != descriptor_size || b.size() != descriptor_size) {

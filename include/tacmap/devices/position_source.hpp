@@ -246,7 +246,7 @@ struct pose_change {
 };
 
 /// The odometry from pose `a` to pose `b` (both in the device frame) in the map frame: the
-/// displacement of the sensor centre and the change of heading (Sec. III-B: the control u_t).
+/// displacement of the sensor centre and the change of heading (Sec.\ III-B: the control u_t).
 /// Throws std::invalid_argument for a non-finite pose or an invalid calibration.
 [[nodiscard]] inline pose_change odometry_between(const sensor_pose& a, const sensor_pose& b,
                                                   const map_calibration& calibration) {

@@ -111,7 +111,7 @@ class serial_port {
 
   serial_port() noexcept = default;
 
-  /// Opens `path` (e.g. /dev/ttyACM0) raw at `baud`, 8N1, no flow control, and discards any
+  /// Opens `path` (e.g.\ /dev/ttyACM0) raw at `baud`, 8N1, no flow control, and discards any
   /// stale input. Throws device_error saying what to do when the device is missing, not
   /// permitted, busy, or not a tty.
   explicit serial_port(std::string path, unsigned baud = 115200) : path_(std::move(path)) {

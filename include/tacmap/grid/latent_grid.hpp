@@ -60,9 +60,9 @@ class latent_grid : public detail::circular_flags<G> {
   static constexpr int dimension = G::dimension;
   using state_type = typename G::state_type;
 
-  /// `base`: the states each hypothesis holds; `names`: one short name per hypothesis (e.g.
-  /// "as photographed", "inverted"), at least one, all different. Throws std::invalid_argument
-  /// otherwise.
+  /// `base`: the states each hypothesis holds; `names`: one short name per hypothesis
+  /// (e.g.\ "as photographed", "inverted"), at least one, all different. Throws
+  /// std::invalid_argument otherwise.
   latent_grid(G base, std::vector<std::string> names)
       : base_(std::move(base)), names_(std::move(names)) {
     if (names_.empty())

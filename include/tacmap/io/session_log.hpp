@@ -432,7 +432,7 @@ class session_recorder {
 
 /// Options of `session_reader`.
 struct session_read_options {
-  /// A last line without its "\n" is a record cut off by a crash. By default it is an error
+  /// A last line without its `"\n"` is a record cut off by a crash. By default it is an error
   /// (nothing is dropped silently); when true it is dropped and reported in `stats()`.
   bool accept_truncated_tail = false;
   std::size_t max_line_bytes = std::size_t{4} << 20U;  ///< longer lines are corrupt

@@ -62,7 +62,7 @@ enum class likelihood_shape {
 
 /// Where a window's descriptors come from.
 enum class window_features {
-  /// The paper's way (Sec. III-C, "the same approach is also applied to the visual images"):
+  /// The paper's way (Sec.\ III-C, "the same approach is also applied to the visual images"):
   /// every window is cut from the map and described on its own, exactly like a tactile image —
   /// same image borders, same normalisation. Precompute: one descriptor extraction per window
   /// (once per map); per touch: M descriptors per window to compare.

@@ -83,6 +83,8 @@ concept describes_at_reusing = describes_at<D> &&
     } -> std::convertible_to<Eigen::Array<typename D::scalar_type, Eigen::Dynamic, Eigen::Dynamic>>;
 };
 
+/// The scratch a model keeps for `D::describe_at`: `D::workspace` when `D` models
+/// `describes_at_reusing`, an empty struct otherwise.
 template <class D>
 struct descriptor_workspace {
   struct type {};

@@ -162,7 +162,7 @@ struct sequence_result {
   return first;
 }
 
-/// The paper's success (Sec. IV-B): error below `threshold_mm` by touch `within` and below it for
+/// The paper's success (Sec.\ IV-B): error below `threshold_mm` by touch `within` and below it for
 /// every later touch.
 [[nodiscard]] inline bool localized(const std::vector<touch_record>& touches,
                                     double threshold_mm = 5.0, std::size_t within = 6) {
@@ -181,7 +181,7 @@ struct sequence_result {
   return 0.5 * (lower + upper);
 }
 
-/// Median error at each touch across sequences (Fig. 6): element t is the median of the errors
+/// Median error at each touch across sequences (Fig.\ 6): element t is the median of the errors
 /// at touch t + 1 over the sequences that have one.
 [[nodiscard]] inline std::vector<double> median_error_per_touch(
     const std::vector<sequence_result>& results) {

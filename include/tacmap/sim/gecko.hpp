@@ -200,7 +200,7 @@ inline shape gecko_shape() {
 }
 
 /// The 7 touch locations on the gecko (sensor centres, mm), in the order of the paper's
-/// Fig. 5 path: from the right to the left and from the bottom to the top. Each is the centre
+/// Fig.\ 5 path: from the right to the left and from the bottom to the top. Each is the centre
 /// of a planar_grid state of the paper's grid (window 18 x 42 px), rounded to 0.1 um.
 [[nodiscard]] inline std::vector<touch_location> gecko_locations() {
   // Window top-left pixels (row i, col j); centre = ((j + 9) s, (i + 21) s).

@@ -168,7 +168,7 @@ inline void gaussian_blur(image<float>& values, double sigma) {
 
 }  // namespace detail::simulation
 
-/// Turns an intensity image (e.g. the visual map, scaled to [0, 1]) into a relief in mm.
+/// Turns an intensity image (e.g.\ the visual map, scaled to [0, 1]) into a relief in mm.
 /// Binary: 1 above `threshold`, else 0, optionally smoothed, times `height_mm`. Continuous:
 /// `height_mm` x intensity. Throws std::invalid_argument for an empty image, a non-finite pixel
 /// (named by row and column) or bad parameters.

@@ -146,7 +146,7 @@ inline image<float> resize_taxels(const image<float>& src, Eigen::Index out_rows
 
 }  // namespace detail
 
-/// Preprocesses one frame (Sec. IV-A). Throws std::invalid_argument for a malformed frame
+/// Preprocesses one frame (Sec.\ IV-A). Throws std::invalid_argument for a malformed frame
 /// (counts that disagree with the geometry, NaN or negative counts) or bad parameters; a weak or
 /// flat frame is not an error but a rejection, reported in the result.
 [[nodiscard]] inline preprocessed_frame preprocess(const tactile_frame& frame,

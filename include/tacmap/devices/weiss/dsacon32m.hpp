@@ -20,6 +20,8 @@
 
 namespace tacmap::weiss {
 
+/// A DSACON32m controller with its DSA 9205 pads on RS232 or USB (usage and power-up handling:
+/// the file comment). Frames, streaming, statistics and reconnection: `detail::device_base`.
 class dsacon32m_device : public detail::device_base {
  public:
   /// Opens the controller at `path`, waits for it to be ready (see above), and reads the sensor

@@ -73,6 +73,8 @@ inline std::vector<std::uint16_t> moving_pattern(const render_request& r) {
 /// Which outgoing packet a fault applies to: the next one of this kind.
 enum class packet_kind : std::uint8_t { any, frame, reply };
 
+/// What the `emulator` pretends to be: controller family, matrix geometry, identity replies
+/// and timing, and where its frames come from (`render`).
 struct emulator_options {
   protocol_family family = protocol_family::wts;
   std::uint16_t res_x = 6;   ///< columns
@@ -96,6 +98,7 @@ struct emulator_options {
   render_function render;  ///< empty: `moving_pattern`
 };
 
+/// What the `emulator` has done so far (`emulator::stats()`).
 struct emulator_stats {
   std::uint64_t commands = 0;          ///< requests answered
   std::uint64_t ignored_commands = 0;  ///< requests dropped (power-up, stall)
@@ -106,6 +109,9 @@ struct emulator_stats {
   std::uint32_t connects = 0;  ///< pty (re)creations
 };
 
+/// An emulated WTS module or DSACON32m on a pseudo-terminal, served by a background thread, with
+/// fault injection; `path()` is what a device class opens (see the file comment). POSIX only;
+/// for tests and demos.
 class emulator {
  public:
   using clock = std::chrono::steady_clock;

@@ -24,6 +24,8 @@ struct wts_identity {
   wts_system_info system;   ///< type, hardware revision, firmware, serial number
 };
 
+/// A WTS tactile module on its USB virtual COM port (usage: the file comment). Frames,
+/// streaming, statistics and reconnection: `detail::device_base`.
 class wts_device : public detail::device_base {
  public:
   /// Opens the module at `path`, stops any acquisition a previous program left running, and
