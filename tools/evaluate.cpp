@@ -306,6 +306,12 @@ int main(int argc, char** argv) try {
       ->check(CLI::Range(0.0, 0.999));
   app.add_option("--wide-sigma", wide_sigma, "the wide component's spread, mm per axis (3)")
       ->check(CLI::Range(0.01, 100.0));
+  std::vector<std::string> wide_headings;
+  app.add_option("--wide-headings", wide_headings,
+                 "pose grids: the wide component blurs each heading's layer (each) or their sum "
+                 "once (pooled) (comma-separated to compare; default: each)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"each", "pooled"}));
   app.add_option("--touches", photo_touches,
                  "touches per sequence of the photographs' protocols (7; the gecko's are fixed)")
       ->check(CLI::Range(1, 200));
@@ -474,10 +480,10 @@ int main(int argc, char** argv) try {
   }
 
   // One copy of every configuration per --lost-probability and per --wide-probability value.
-  const auto expand = [&](const std::vector<double>& values, auto assign) {
+  const auto expand = [&](const auto& values, auto assign) {
     if (values.empty()) return;
     std::vector<tacmap::localization_config> expanded;
-    for (const double v : values)
+    for (const auto& v : values)
       for (auto c : configs) {
         assign(c, v);
         expanded.push_back(c);
@@ -489,6 +495,9 @@ int main(int argc, char** argv) try {
   for (auto& c : configs) c.wide_sigma_mm = wide_sigma;
   expand(wide_probabilities,
          [](tacmap::localization_config& c, double v) { c.wide_probability = v; });
+  expand(wide_headings, [](tacmap::localization_config& c, const std::string& v) {
+    c.wide_headings = v == "pooled" ? tacmap::wide_layers::pooled : tacmap::wide_layers::each;
+  });
 
   // One copy of every configuration per --headings value (NCC only with known orientation).
   {

@@ -167,6 +167,13 @@ struct localizer_config {
   [[nodiscard]] double wide() const {
     return wide_probability.value_or(headings > 0 ? 0.0 : default_wide_probability);
   }
+  /// Pose grids: whether the wide component blurs each heading's layer or their sum once
+  /// (`wide_layers`). Empty: `default_wide_layers`.
+  std::optional<wide_layers> wide_headings;
+  static constexpr wide_layers default_wide_layers = wide_layers::each;
+  [[nodiscard]] wide_layers wide_layering() const {
+    return wide_headings.value_or(default_wide_layers);
+  }
 
   /// The paper's configuration (Sec.\ III-C, IV): SIFT-lite, every patch against every patch
   /// (eq.\ (1)), the inverse likelihood (eq.\ (2)), per-window features, a fixed appearance
@@ -200,8 +207,10 @@ struct localizer_config {
     if (headings < 0)
       detail::fail("localizer_config: headings = ", headings,
                    "; expected 0 (known orientation) or the number of headings of a pose grid");
-    robust_motion_params{
-        .lost_probability = lost(), .wide_probability = wide(), .wide_sigma_mm = wide_sigma_mm}
+    robust_motion_params{.lost_probability = lost(),
+                         .wide_probability = wide(),
+                         .wide_sigma_mm = wide_sigma_mm,
+                         .layers = wide_layering()}
         .validate();
     if (appearance_switch && appearance != appearance_handling::latent)
       detail::fail("localizer_config: appearance_switch = ", *appearance_switch,
@@ -265,6 +274,7 @@ struct localizer_config {
       t << *wide_probability << "x" << wide_sigma_mm << "mm";
       out += "/wide=" + t.str();
     }
+    if (wide_headings) out += std::string("/wide-headings=") + to_string(*wide_headings);
 
     return out;
   }
@@ -411,8 +421,10 @@ using pose_localizer_filter = bayes_filter<latent_grid<pose_grid<float>>,
 namespace detail {
 
 inline robust_motion_params robust_params(const localizer_config& c) {
-  return {
-      .lost_probability = c.lost(), .wide_probability = c.wide(), .wide_sigma_mm = c.wide_sigma_mm};
+  return {.lost_probability = c.lost(),
+          .wide_probability = c.wide(),
+          .wide_sigma_mm = c.wide_sigma_mm,
+          .layers = c.wide_layering()};
 }
 
 }  // namespace detail

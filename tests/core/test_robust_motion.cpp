@@ -12,6 +12,33 @@
 
 using tacmap_test::message_of;
 
+namespace {
+
+// Three passes of a box of radius r along each axis of a rows x cols plane, each a direct sum
+// over the window with zero outside (mass blurred off the plane is gone): the reference for
+// robust_motion's sliding sums.
+std::vector<double> three_box_blur(std::vector<double> plane, Eigen::Index rows, Eigen::Index cols,
+                                   Eigen::Index r) {
+  const double norm = 1.0 / static_cast<double>(2 * r + 1);
+  for (const bool along_rows : {true, false})
+    for (int pass = 0; pass < 3; ++pass) {
+      const std::vector<double> before = plane;
+      for (Eigen::Index row = 0; row < rows; ++row)
+        for (Eigen::Index col = 0; col < cols; ++col) {
+          double sum = 0.0;
+          for (Eigen::Index d = -r; d <= r; ++d) {
+            const Eigen::Index rr = along_rows ? row : row + d, cc = along_rows ? col + d : col;
+            if (rr >= 0 && rr < rows && cc >= 0 && cc < cols)
+              sum += before[static_cast<std::size_t>(rr * cols + cc)];
+          }
+          plane[static_cast<std::size_t>(row * cols + col)] = sum * norm;
+        }
+    }
+  return plane;
+}
+
+}  // namespace
+
 TEST_CASE("robust_motion: (1 - lambda) base + lambda / N, and lambda = 0 is the base model") {
   const auto grid = tacmap_test::lattice_filter().grid();
   const tacmap::odometry_gaussian base({.sigma_mm = 1.0, .k = 8});
@@ -113,28 +140,11 @@ TEST_CASE("robust_motion: the wide blur equals a direct 2-D convolution with thr
   const tacmap::robust_motion<identity> wide({}, {.wide_probability = w, .wide_sigma_mm = 2.0});
   tacmap::belief_array<tacmap_test::table_grid> got(grid.size());
   wide.predict(grid, in, got, {});
-  // Reference: three passes of a box of radius 2 (sigma 2 mm -> r = 2) along each axis, each
-  // a direct sum over the window with zero outside (mass blurred off the grid is gone).
+  // Reference: three passes of a box of radius 2 (sigma 2 mm -> r = 2) along each axis.
   std::vector<double> blurred(static_cast<std::size_t>(in.size()));
   for (Eigen::Index i = 0; i < in.size(); ++i)
     blurred[static_cast<std::size_t>(i)] = static_cast<double>(in(i));
-  const auto at = [&](Eigen::Index r, Eigen::Index c) -> double& {
-    return blurred[static_cast<std::size_t>(r * cols + c)];
-  };
-  for (const bool along_rows : {true, false})
-    for (int pass = 0; pass < 3; ++pass) {
-      const std::vector<double> before = blurred;
-      for (Eigen::Index r = 0; r < rows; ++r)
-        for (Eigen::Index c = 0; c < cols; ++c) {
-          double sum = 0.0;
-          for (Eigen::Index d = -2; d <= 2; ++d) {
-            const Eigen::Index rr = along_rows ? r : r + d, cc = along_rows ? c + d : c;
-            if (rr >= 0 && rr < rows && cc >= 0 && cc < cols)
-              sum += before[static_cast<std::size_t>(rr * cols + cc)];
-          }
-          at(r, c) = sum / 5.0;
-        }
-    }
+  blurred = three_box_blur(blurred, rows, cols, 2);
   std::vector<double> want(static_cast<std::size_t>(in.size()));
   for (Eigen::Index i = 0; i < in.size(); ++i)
     want[static_cast<std::size_t>(i)] =
@@ -144,4 +154,63 @@ TEST_CASE("robust_motion: the wide blur equals a direct 2-D convolution with thr
   for (Eigen::Index i = 0; i < in.size(); ++i)
     CHECK(static_cast<double>(got(i)) ==
           doctest::Approx(want[static_cast<std::size_t>(i)] / total).epsilon(1e-5));
+}
+
+TEST_CASE("robust_motion: pooled layers blur each hypothesis's heading sum once, spread evenly") {
+  // 2 hypotheses x 3 headings x (9 x 12) positions at 1 mm per px; no motion noise to speak of.
+  using grid_type = tacmap::latent_grid<tacmap::pose_grid<float>>;
+  const grid_type grid(
+      tacmap::pose_grid<float>(
+          tacmap::planar_grid<float>({.width = 14, .height = 12}, 1.0, {.width = 3, .height = 4}),
+          3),
+      {"a", "b"});
+  const Eigen::Index plane = grid.rows() * grid.cols(), layers = 3;
+  REQUIRE(grid.size() == 2 * layers * plane);
+  tacmap::belief_array<grid_type> in(grid.size());
+  for (Eigen::Index i = 0; i < in.size(); ++i)
+    in(i) = 0.5F + static_cast<float>((i * 53) % 17) + (i < plane ? 40.0F : 0.0F);
+  in /= in.sum();
+  struct identity {
+    using control_type = tacmap::sensor_odometry;
+    tacmap::prediction_report predict(const grid_type&, const tacmap::belief_array<grid_type>& a,
+                                      tacmap::belief_array<grid_type>& b,
+                                      const control_type&) const {
+      b = a;
+      return {};
+    }
+  };
+  const double w = 0.25;
+  const tacmap::robust_motion<identity> pooled(
+      {}, {.wide_probability = w, .wide_sigma_mm = 2.0, .layers = tacmap::wide_layers::pooled});
+  tacmap::belief_array<grid_type> got(grid.size());
+  pooled.predict(grid, in, got, {});
+  // Reference: per hypothesis, the layers' sum blurred (r = 2), a third of it added to each.
+  std::vector<double> want(static_cast<std::size_t>(in.size()));
+  double total = 0.0;
+  for (Eigen::Index h = 0; h < 2; ++h) {
+    std::vector<double> sum(static_cast<std::size_t>(plane), 0.0);
+    for (Eigen::Index l = 0; l < layers; ++l)
+      for (Eigen::Index i = 0; i < plane; ++i)
+        sum[static_cast<std::size_t>(i)] += static_cast<double>(in((h * layers + l) * plane + i));
+    const std::vector<double> blurred = three_box_blur(sum, grid.rows(), grid.cols(), 2);
+    for (Eigen::Index l = 0; l < layers; ++l)
+      for (Eigen::Index i = 0; i < plane; ++i) {
+        const Eigen::Index at = (h * layers + l) * plane + i;
+        want[static_cast<std::size_t>(at)] =
+            (1 - w) * static_cast<double>(in(at)) +
+            w / static_cast<double>(layers) * blurred[static_cast<std::size_t>(i)];
+        total += want[static_cast<std::size_t>(at)];
+      }
+  }
+  for (Eigen::Index i = 0; i < in.size(); ++i)
+    CHECK(static_cast<double>(got(i)) ==
+          doctest::Approx(want[static_cast<std::size_t>(i)] / total).epsilon(1e-5));
+  // The hypotheses keep their masses (pooling never mixes them), and the default (each layer
+  // on its own) differs from pooling on this belief, whose layers differ.
+  CHECK(static_cast<double>(got.head(layers * plane).sum()) ==
+        doctest::Approx(static_cast<double>(in.head(layers * plane).sum())).epsilon(1e-3));
+  const tacmap::robust_motion<identity> each({}, {.wide_probability = w, .wide_sigma_mm = 2.0});
+  tacmap::belief_array<grid_type> per_layer(grid.size());
+  each.predict(grid, in, per_layer, {});
+  CHECK((per_layer - got).abs().maxCoeff() > 1e-4F);
 }
