@@ -4,10 +4,14 @@
 // order of the protocol's sequence 0 (the path of the paper's Fig. 5). Each touch is a simulated,
 // noisy tactile frame; between touches the filter predicts with the arm's measured (noisy)
 // odometry and then updates with the tactile image, using the library's default measurement model
-// configuration (`tacmap::localization_config{}`). After every touch it prints the MAP error in mm
-// and the belief's entropy, and at the end writes a figure like Fig. 5: one column per touch —
-// the tactile image (upsampled), the map with the true sensor window (green) and the MAP
-// estimate (red), the belief as a heat map over the map (true centre: green cross).
+// configuration (`tacmap::localization_config{}`). After every touch it prints the error in mm
+// and the belief's entropy, and at the end writes a figure like Fig. 5 that explains itself (row
+// labels, colour bar, scale bars and the key are in the picture): one column per touch — the
+// tactile image, the map with the true sensor window (green) and the estimate's (cyan, dashed,
+// on top), the belief over the whole map and zoomed around the truth on one log probability
+// scale shared by all panels (true centre: green ring of 5 mm; estimate: cyan cross over it),
+// and the numbers. The PNGs are compressed (io/image_file.hpp, stb_image_write) and the text is
+// stb's quad font (stb_easy_font): the demo needs stb (Debian libstb-dev, tacmap::image_file).
 //
 // The touches are simulated in the realistic scenario (sim/scenario.hpp): the map is what a
 // webcam makes of the print, the print is misregistered by ~1 mm / 1 degree, every press turns,
@@ -26,16 +30,38 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "tacmap/io/image_file.hpp"  // write_png_compressed (stb_image_write; tacmap::image_file)
 #include "tacmap/io/image_io.hpp"
 #include "tacmap/io/png_rgb.hpp"
 #include "tacmap/sim/experiment.hpp"
 #include "tacmap/sim/protocol.hpp"
+
+// stb's quad font for the figure's text (ASCII, from libstb-dev like image_file.hpp's stb):
+// all its functions are static, and its warnings are stb's.
+#if defined(__GNUC__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wsign-conversion"
+#pragma GCC diagnostic ignored "-Wold-style-cast"
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wdouble-promotion"
+#pragma GCC diagnostic ignored "-Wuseless-cast"
+#endif
+#if __has_include(<stb/stb_easy_font.h>)
+#include <stb/stb_easy_font.h>
+#else
+#include <stb_easy_font.h>
+#endif
+#if defined(__GNUC__)
+#pragma GCC diagnostic pop
+#endif
 
 #ifndef TACMAP_DATA_DIR
 #error "TACMAP_DATA_DIR must name tacmap's data/ folder"
@@ -43,163 +69,431 @@
 
 namespace {
 
-// A 3 x 5 pixel font for the figure's numbers: digits, '.', 'm' and ' '.
-const std::array<const char*, 5>* glyph(char ch) {
-  static const std::array<std::array<const char*, 5>, 13> font = {{
-      {"111", "101", "101", "101", "111"},
-      {"010", "110", "010", "010", "111"},
-      {"111", "001", "111", "100", "111"},
-      {"111", "001", "111", "001", "111"},
-      {"101", "101", "111", "001", "001"},
-      {"111", "100", "111", "001", "111"},
-      {"111", "100", "111", "101", "111"},
-      {"111", "001", "001", "001", "001"},
-      {"111", "101", "111", "101", "111"},
-      {"111", "101", "111", "001", "111"},
-      {"000", "000", "000", "000", "010"},
-      {"000", "000", "111", "111", "101"},
-      {"000", "000", "000", "000", "000"},
-  }};
-  if (ch >= '0' && ch <= '9') return &font[static_cast<std::size_t>(ch - '0')];
-  if (ch == '.') return &font[10];
-  if (ch == 'm') return &font[11];
-  if (ch == ' ') return &font[12];
-  return nullptr;
+using tacmap::rgb_image;
+using index_t = Eigen::Index;
+
+struct colour {
+  float r, g, b;
+};
+constexpr colour black{0.0F, 0.0F, 0.0F}, white{1.0F, 1.0F, 1.0F}, grey{0.35F, 0.35F, 0.35F};
+// Truth and estimate: green and cyan, apart from each other and from the belief's colour map
+// (inferno: black, purple, red, orange, yellow); their shapes differ too (solid box and ring
+// for the truth, dashed box and cross for the estimate), for readers who do not tell them apart.
+constexpr colour truth_colour{0.15F, 0.95F, 0.15F}, estimate_colour{0.0F, 0.85F, 1.0F};
+constexpr colour dark_colour{0.95F, 0.55F, 0.1F}, bright_colour{0.25F, 0.45F, 0.85F};
+
+void put(rgb_image& img, index_t row, index_t col, colour c) { img.set(row, col, c.r, c.g, c.b); }
+
+void fill(rgb_image& img, index_t top, index_t left, index_t h, index_t w, colour c) {
+  for (index_t r = top; r < top + h; ++r)
+    for (index_t x = left; x < left + w; ++x) put(img, r, x, c);
 }
 
-void draw_text(tacmap::rgb_image& img, Eigen::Index top, Eigen::Index left, const std::string& s,
-               int scale, float grey) {
-  Eigen::Index x = left;
-  for (const char ch : s) {
-    if (const auto* g = glyph(ch)) {
-      for (Eigen::Index r = 0; r < 5; ++r)
-        for (Eigen::Index c = 0; c < 3; ++c)
-          if ((*g)[static_cast<std::size_t>(r)][c] == '1')
-            for (int dy = 0; dy < scale; ++dy)
-              for (int dx = 0; dx < scale; ++dx)
-                img.set(top + r * scale + dy, x + c * scale + dx, grey, grey, grey);
-    }
-    x += 4 * scale;
+// Text through stb_easy_font (stb's quad font: ASCII, 12 px per line at scale 1), each quad
+// filled as a `scale` x `scale` px block per font pixel.
+struct easy_font_vertex {
+  float x, y, z;
+  unsigned char rgba[4];
+};
+
+index_t text_width(const std::string& s, int scale) {
+  std::vector<char> text(s.begin(), s.end());
+  text.push_back('\0');
+  return static_cast<index_t>(stb_easy_font_width(text.data())) * scale;
+}
+
+// Draws `s` with its top-left corner at (top, left); returns the x just after it.
+index_t draw_text(rgb_image& img, index_t top, index_t left, const std::string& s, int scale,
+                  colour c = black) {
+  std::vector<char> text(s.begin(), s.end());
+  text.push_back('\0');
+  std::vector<easy_font_vertex> quads(s.size() * 4 * 24 + 64);
+  const int n = stb_easy_font_print(0.0F, 0.0F, text.data(), nullptr, quads.data(),
+                                    static_cast<int>(quads.size() * sizeof(easy_font_vertex)));
+  for (int q = 0; q < n; ++q) {
+    const easy_font_vertex& a = quads[static_cast<std::size_t>(4 * q)];
+    const easy_font_vertex& b = quads[static_cast<std::size_t>(4 * q + 2)];
+    const auto at = [scale](float v) {
+      return static_cast<index_t>(std::lround(v * static_cast<float>(scale)));
+    };
+    fill(img, top + at(a.y), left + at(a.x), at(b.y) - at(a.y), at(b.x) - at(a.x), c);
   }
+  return left + text_width(s, scale);
+}
+
+// Several lines, `line_h` px apart; returns the y below the last.
+index_t draw_lines(rgb_image& img, index_t top, index_t left, const std::vector<std::string>& lines,
+                   int scale, index_t line_h, colour c = black) {
+  for (const auto& line : lines) {
+    draw_text(img, top, left, line, scale, c);
+    top += line_h;
+  }
+  return top;
+}
+
+// `text` split at spaces into lines at most `max_w` px wide at `scale`.
+std::vector<std::string> wrap(const std::string& text, int scale, index_t max_w) {
+  std::vector<std::string> lines;
+  std::string current;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find(' ', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string word = text.substr(start, end - start);
+    const std::string longer = current.empty() ? word : current + " " + word;
+    if (!current.empty() && text_width(longer, scale) > max_w) {
+      lines.push_back(current);
+      current = word;
+    } else {
+      current = longer;
+    }
+    start = end + 1;
+  }
+  if (!current.empty()) lines.push_back(current);
+  return lines;
 }
 
 // A grey image scaled up by `s` (nearest neighbour) with its top-left at (top, left).
-void blit_grey(tacmap::rgb_image& img, const tacmap::image<float>& src, Eigen::Index top,
-               Eigen::Index left, int s, float gain = 1.0F) {
-  for (Eigen::Index r = 0; r < src.rows() * s; ++r)
-    for (Eigen::Index c = 0; c < src.cols() * s; ++c) {
-      const float v = gain * src(r / s, c / s);
+void blit_grey(rgb_image& img, const tacmap::image<float>& src, index_t top, index_t left, int s) {
+  for (index_t r = 0; r < src.rows() * s; ++r)
+    for (index_t c = 0; c < src.cols() * s; ++c) {
+      const float v = src(r / s, c / s);
       img.set(top + r, left + c, v, v, v);
     }
 }
 
-// Outline of a map-pixel rectangle (x0, y0, w, h in map px) on a panel scaled by `s`.
-void draw_rect(tacmap::rgb_image& img, Eigen::Index top, Eigen::Index left, int s, double x0,
-               double y0, double w, double h, float red, float green, float blue) {
-  const auto px = [&](double v) { return static_cast<Eigen::Index>(std::lround(v * s)); };
-  const Eigen::Index c0 = left + px(x0), c1 = left + px(x0 + w) - 1;
-  const Eigen::Index r0 = top + px(y0), r1 = top + px(y0 + h) - 1;
-  for (int t = 0; t < 2; ++t) {  // 2 px thick lines
-    for (Eigen::Index c = c0; c <= c1; ++c) {
-      img.set(r0 + t, c, red, green, blue);
-      img.set(r1 - t, c, red, green, blue);
+// Outline of a rectangle in screen px, 2 px thick, with a 1 px black edge outside and inside so
+// that it shows on any background; `dashed`: 6 px on, 4 px off.
+void draw_box(rgb_image& img, index_t r0, index_t c0, index_t r1, index_t c1, colour c,
+              bool dashed) {
+  const auto on = [dashed](index_t k) { return !dashed || (k % 10) < 6; };
+  const auto ring = [&](index_t inset, colour col, bool dash) {
+    for (index_t x = c0 + inset; x <= c1 - inset; ++x)
+      if (!dash || on(x - c0)) {
+        put(img, r0 + inset, x, col);
+        put(img, r1 - inset, x, col);
+      }
+    for (index_t y = r0 + inset; y <= r1 - inset; ++y)
+      if (!dash || on(y - r0)) {
+        put(img, y, c0 + inset, col);
+        put(img, y, c1 - inset, col);
+      }
+  };
+  if (!dashed) {  // the dashed (estimate) box keeps the truth's box visible through its gaps
+    ring(-1, black, false);
+    ring(2, black, false);
+  }
+  ring(0, c, dashed);
+  ring(1, c, dashed);
+}
+
+// A 1 px black frame just outside the rectangle (r0, c0)-(r1, c1).
+void frame(rgb_image& img, index_t r0, index_t c0, index_t r1, index_t c1) {
+  fill(img, r0 - 1, c0 - 1, 1, c1 - c0 + 3, black);
+  fill(img, r1 + 1, c0 - 1, 1, c1 - c0 + 3, black);
+  fill(img, r0 - 1, c0 - 1, r1 - r0 + 3, 1, black);
+  fill(img, r0 - 1, c1 + 1, r1 - r0 + 3, 1, black);
+}
+
+// The truth's marker: a ring of radius `radius` px (the 5 mm success radius: an estimate inside
+// it is "localized"), 2 px thick, with black edges; hollow, so the belief shows inside it.
+void draw_ring(rgb_image& img, index_t row, index_t col, double radius) {
+  const auto reach = static_cast<index_t>(radius) + 3;
+  for (index_t dy = -reach; dy <= reach; ++dy)
+    for (index_t dx = -reach; dx <= reach; ++dx) {
+      const double d = std::hypot(static_cast<double>(dy), static_cast<double>(dx)) - radius;
+      if (d >= -2.0 && d <= 2.0) put(img, row + dy, col + dx, black);
+      if (d >= -1.0 && d <= 1.0) put(img, row + dy, col + dx, truth_colour);
     }
-    for (Eigen::Index r = r0; r <= r1; ++r) {
-      img.set(r, c0 + t, red, green, blue);
-      img.set(r, c1 - t, red, green, blue);
-    }
+}
+
+// The estimate's marker, drawn after (over) the truth's: a "+" reticle with black edges whose
+// arms (from `inner` to `outer` px from the centre) leave the centre open, so that the belief's
+// peak shows, and fit inside the ring, so that both show when the error is 0.
+void draw_cross(rgb_image& img, index_t row, index_t col, index_t inner, index_t outer,
+                index_t half_width) {
+  for (int pass = 0; pass < 2; ++pass) {
+    const colour c = pass == 0 ? black : estimate_colour;
+    const index_t edge = pass == 0 ? 1 : 0;
+    for (index_t d = inner - edge; d <= outer + edge; ++d)
+      for (index_t t = -half_width - edge; t <= half_width - 1 + edge; ++t)
+        for (const index_t sign : {-1, 1}) {
+          put(img, row + sign * d, col + t, c);
+          put(img, row + t, col + sign * d, c);
+        }
   }
 }
 
-void draw_cross(tacmap::rgb_image& img, Eigen::Index row, Eigen::Index col, float red, float green,
-                float blue) {
-  for (Eigen::Index d = -6; d <= 6; ++d)
-    for (Eigen::Index t = -1; t <= 0; ++t) {
-      img.set(row + d, col + t, red, green, blue);
-      img.set(row + t, col + d, red, green, blue);
+// Horizontal scale bar of `length_mm` at `px_per_mm`, its label to the right.
+void draw_scale_bar(rgb_image& img, index_t top, index_t left, double length_mm, double px_per_mm,
+                    const std::string& label) {
+  const auto w = static_cast<index_t>(std::lround(length_mm * px_per_mm));
+  fill(img, top, left, 6, w, black);
+  fill(img, top - 4, left, 14, 2, black);
+  fill(img, top - 4, left + w - 2, 14, 2, black);
+  draw_text(img, top - 5, left + w + 8, label, 2);
+}
+
+// inferno (matplotlib's perceptually uniform map, sampled at 9 points): dark = improbable.
+colour colour_map(double t) {
+  static const std::array<colour, 9> anchors = {{{0.001F, 0.000F, 0.014F},
+                                                 {0.129F, 0.047F, 0.291F},
+                                                 {0.342F, 0.062F, 0.429F},
+                                                 {0.541F, 0.135F, 0.415F},
+                                                 {0.736F, 0.216F, 0.330F},
+                                                 {0.894F, 0.353F, 0.194F},
+                                                 {0.978F, 0.558F, 0.035F},
+                                                 {0.975F, 0.798F, 0.206F},
+                                                 {0.988F, 0.998F, 0.645F}}};
+  const double x = std::clamp(t, 0.0, 1.0) * 8.0;
+  const auto i = std::min<std::size_t>(7, static_cast<std::size_t>(x));
+  const auto f = static_cast<float>(x - static_cast<double>(i));
+  const colour a = anchors[i], b = anchors[i + 1];
+  return {a.r + f * (b.r - a.r), a.g + f * (b.g - a.g), a.b + f * (b.b - a.b)};
+}
+
+// The belief's colour scale, the same for every panel of both figures: log10 of the
+// probability of a grid cell, from 1e-5 (and below, and outside the grid: black) to 1.
+constexpr double log_p_min = -5.0, log_p_max = 0.0;
+double scale_position(double p) {
+  if (!(p > 0.0)) return 0.0;
+  return (std::log10(p) - log_p_min) / (log_p_max - log_p_min);
+}
+
+// The belief over a panel of `h` x `w` screen px at `zoom` screen px per map px, whose top-left
+// corner shows map px (origin_row, origin_col): the state with top-left (br, bc) is drawn at its
+// window's centre; places no window centre can reach have probability 0 (black); the map's
+// outline in white.
+void draw_belief(rgb_image& img, index_t top, index_t left, index_t h, index_t w,
+                 const tacmap::image<float>& bel, const tacmap::image<std::uint8_t>& edges,
+                 tacmap::pixel_size win, int zoom, double origin_row, double origin_col) {
+  for (index_t r = 0; r < h; ++r)
+    for (index_t c = 0; c < w; ++c) {
+      const auto mr = static_cast<index_t>(std::floor(origin_row + static_cast<double>(r) / zoom));
+      const auto mc = static_cast<index_t>(std::floor(origin_col + static_cast<double>(c) / zoom));
+      const index_t br = mr - win.height / 2, bc = mc - win.width / 2;
+      double p = 0.0;
+      if (br >= 0 && bc >= 0 && br < bel.rows() && bc < bel.cols())
+        p = static_cast<double>(bel(br, bc));
+      colour col = colour_map(scale_position(p));
+      if (mr >= 0 && mc >= 0 && mr < edges.rows() && mc < edges.cols() && edges(mr, mc) != 0) {
+        constexpr float a = 0.45F;
+        col = {(1 - a) * col.r + a, (1 - a) * col.g + a, (1 - a) * col.b + a};
+      }
+      put(img, top + r, left + c, col);
     }
 }
 
-std::string one_decimal(double v) {
+// The map's outline for the belief panels: where a 3 x 3 box-blurred map crosses its mean.
+tacmap::image<std::uint8_t> outline(const tacmap::image<float>& map) {
+  tacmap::image<float> blur = map;
+  for (index_t r = 0; r < map.rows(); ++r)
+    for (index_t c = 0; c < map.cols(); ++c) {
+      float sum = 0.0F;
+      int n = 0;
+      for (index_t dr = -1; dr <= 1; ++dr)
+        for (index_t dc = -1; dc <= 1; ++dc)
+          if (r + dr >= 0 && c + dc >= 0 && r + dr < map.rows() && c + dc < map.cols()) {
+            sum += map(r + dr, c + dc);
+            ++n;
+          }
+      blur(r, c) = sum / static_cast<float>(n);
+    }
+  const float level = blur.mean();
+  tacmap::image<std::uint8_t> edge = tacmap::image<std::uint8_t>::Zero(map.rows(), map.cols());
+  for (index_t r = 0; r + 1 < map.rows(); ++r)
+    for (index_t c = 0; c + 1 < map.cols(); ++c) {
+      const bool above = blur(r, c) > level;
+      if (above != (blur(r + 1, c) > level) || above != (blur(r, c + 1) > level)) edge(r, c) = 1;
+    }
+  return edge;
+}
+
+std::string fixed(double v, int decimals) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.1f", v);
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
   return buf;
 }
 
-// The figure: one column per touch, rows = tactile image, map with the true window (green) and
-// the MAP window (red), the belief over the map with the true centre, the error; with
-// `appearance_row`, a bar per touch: the posterior that the object's raised parts look dark
-// (orange share) against bright (blue share).
+// The figure is checked as CTest runs the demo: it decodes (stb_image) to the size drawn, and
+// stays under 500 KB, small enough to attach, commit or open anywhere.
+void check_figure(const std::filesystem::path& png, const rgb_image& drawn) {
+  const auto bytes = std::filesystem::file_size(png);
+  if (bytes >= 500U * 1024U)
+    tacmap::detail::fail("gecko_demo: ", png, " is ", bytes / 1024U,
+                         " KB; expected a compressed figure under 500 KB");
+  const tacmap::image<float> back = tacmap::load_image(png);
+  if (back.rows() != drawn.rows() || back.cols() != drawn.cols())
+    tacmap::detail::fail("gecko_demo: ", png, " decodes to ", back.rows(), " x ", back.cols(),
+                         " px; expected the ", drawn.rows(), " x ", drawn.cols(), " px drawn");
+}
+
+struct figure_text {
+  std::string title;     // what was localized
+  std::string subtitle;  // how (model, scenario)
+};
+
+// The figure (like the paper's Fig. 5): one column per touch; rows: the tactile image, the map
+// with the true and the estimated sensor window, the belief over the map with the true and the
+// estimated centre, the numbers; with `appearance_row`, a bar per touch: the posterior that the
+// object's raised parts look dark (orange share) against bright (blue share). Row labels, the
+// colour bar, scale bars and the key are drawn into the figure: it explains itself.
 void write_figure(const std::filesystem::path& png, const tacmap::sequence_result& run,
                   const tacmap::image<float>& map, tacmap::pixel_size win, double mm,
-                  bool appearance_row) {
+                  bool appearance_row, const figure_text& words) {
   constexpr int s = 2;   // map panels: 2 screen px per map px
-  constexpr int ts = 4;  // tactile panel: 4 screen px per map px
-  constexpr Eigen::Index margin = 10, gap = 12, bar_h = 16;
-  const Eigen::Index panel_w = map.cols() * s, panel_h = map.rows() * s;
-  const Eigen::Index tact_h = win.height * ts;
-  const Eigen::Index n = static_cast<Eigen::Index>(run.touches.size());
-  const Eigen::Index y_header = margin, y_tact = y_header + 25, y_map = y_tact + tact_h + gap,
-                     y_bel = y_map + panel_h + gap, y_err = y_bel + panel_h + gap,
-                     y_app = y_err + 20 + gap;
-  const Eigen::Index height = (appearance_row ? y_app + bar_h + 20 : y_err + 20) + margin;
-  tacmap::rgb_image fig = tacmap::rgb_image::filled(height, margin + n * (panel_w + gap), 1, 1, 1);
-  for (Eigen::Index i = 0; i < n; ++i) {
+  constexpr int ts = 4;  // tactile panel: 4 screen px per map px (2x the map panels' scale)
+  constexpr index_t margin = 16, gap = 16, label_w = 360, line = 24, bar_h = 18;
+  const index_t panel_w = map.cols() * s, panel_h = map.rows() * s;
+  const index_t tact_h = win.height * ts;
+  const index_t n = static_cast<index_t>(run.touches.size());
+  const index_t x0 = margin + label_w;  // first column
+  const index_t y_title = margin, y_head = y_title + 2 * line + 16, y_tact = y_head + line + 6;
+  const index_t y_map = y_tact + std::max<index_t>(tact_h, 5 * line) + gap;
+  constexpr int zoom = 4 * s;  // the zoomed belief panels: 4x the map panels' scale
+  const index_t y_bel = y_map + panel_h + gap, y_zoom = y_bel + panel_h + gap;
+  const index_t y_num = y_zoom + panel_h + 10;
+  const index_t y_app = y_num + 4 * line + 16;
+  const index_t y_key = (appearance_row ? y_app + 3 * line : y_num + 4 * line) + 20;
+  const index_t width = x0 + n * (panel_w + gap) - gap + margin;
+  const double px_per_mm = s / mm;
+  const double cells = static_cast<double>(run.beliefs.empty() ? 1 : run.beliefs[0].size());
+  // The key: what a reader needs without the terminal, wrapped to the figure's width.
+  const std::string n_cells = std::to_string(static_cast<long>(cells));
+  std::string key =
+      "How to read: the columns are the touches, in order; between touches the arm moved by its "
+      "noisy odometry. Green = the truth, cyan = the filter's estimate after that touch, drawn on "
+      "top; the ring is 5 mm around the true centre (an estimate inside it counts as localized). "
+      "Belief: the probability that the sensor's centre is in each 1-px cell of the map (" +
+      fixed(mm, 2) + " mm per px, " + n_cells +
+      " cells), on one log colour scale for all panels: a flat belief (no information, 1/" +
+      n_cells +
+      " per cell, the green tick on the colour bar) looks dark, a small bright spot is a certain "
+      "belief; black = below 1e-5 or out of reach. Entropy " +
+      fixed(std::log(cells), 1) +
+      " nats = flat. P(err<=5mm): the belief's own claim that the error is below 5 mm; the "
+      "verdict follows from it.";
+  if (appearance_row)
+    key +=
+        " Bar: the filter's posterior that the object's raised parts look DARK in the photo "
+        "(orange share) rather than bright (blue); nobody told it which.";
+  const std::vector<std::string> key_lines = wrap(key, 2, width - 2 * margin);
+  const index_t height = y_key + static_cast<index_t>(key_lines.size()) * line + margin;
+  rgb_image fig = rgb_image::filled(height, width, 1, 1, 1);
+
+  // Title and row labels.
+  draw_text(fig, y_title, margin, words.title, 3);
+  draw_text(fig, y_title + 3 * 12 + 4, margin, words.subtitle, 2, grey);
+  draw_lines(fig, y_tact, margin,
+             {"what the sensor felt", "tactile image,", "14 x 6 taxels", "(white = pressed)"}, 2,
+             line);
+  draw_scale_bar(fig, y_tact + 4 * line + 8, margin, 10.0, ts / mm, "10 mm");
+  draw_lines(fig, y_map, margin,
+             {"where it was: the", "map (a photo)", "sensor window:", "truth: green box",
+              "estimate: cyan box,", "dashed, on top"},
+             2, line);
+  draw_scale_bar(fig, y_map + 6 * line + 14, margin, 20.0, px_per_mm, "20 mm");
+  draw_lines(fig, y_bel, margin,
+             {"belief after the", "touch: P(sensor", "centre in a 1-px", "cell), log scale",
+              "for all panels;", "green tick: flat", "ring: 5 mm around", "the true centre",
+              "+: the estimate"},
+             2, line);
+  draw_lines(fig, y_zoom, margin,
+             {"the same belief,", "zoomed 4x around", "the truth", "white: the map's", "outline"},
+             2, line);
+  draw_scale_bar(fig, y_zoom + 5 * line + 14, margin, 5.0, zoom / mm, "5 mm");
+  // Colour bar beside the belief labels: 1e-5 (black) to 1, one tick per decade, and the
+  // level of a uniform belief (no information yet), so that a flat belief is read as such.
+  const index_t cb_x = margin + label_w - 86, cb_w = 16;
+  for (index_t r = 0; r < panel_h; ++r) {
+    const double t = 1.0 - static_cast<double>(r) / static_cast<double>(panel_h - 1);
+    fill(fig, y_bel + r, cb_x, 1, cb_w, colour_map(t));
+  }
+  frame(fig, y_bel, cb_x, y_bel + panel_h - 1, cb_x + cb_w - 1);
+  const std::array<const char*, 6> ticks = {"1", "0.1", "0.01", "1e-3", "1e-4", "1e-5"};
+  for (std::size_t k = 0; k < ticks.size(); ++k) {
+    const index_t y = y_bel + static_cast<index_t>(k) * (panel_h - 1) / 5;
+    fill(fig, y, cb_x + cb_w, 1, 5, black);
+    draw_text(fig, y - 8, cb_x + cb_w + 8, ticks[k], 2);
+  }
+  const auto uniform_y =
+      y_bel + static_cast<index_t>(std::lround((1.0 - scale_position(1.0 / cells)) *
+                                               static_cast<double>(panel_h - 1)));
+  fill(fig, uniform_y - 1, cb_x - 10, 3, cb_w + 10, truth_colour);
+
+  const tacmap::image<std::uint8_t> edges = outline(map);
+  const double ring_radius = std::max(8.0, 5.0 * px_per_mm);  // 5 mm, the success radius
+  const double ww = static_cast<double>(win.width), wh = static_cast<double>(win.height);
+  const auto screen = [&](double v_mm) { return static_cast<index_t>(std::lround(v_mm / mm * s)); };
+  for (index_t i = 0; i < n; ++i) {
     const auto& t = run.touches[static_cast<std::size_t>(i)];
-    const Eigen::Index x = margin + i * (panel_w + gap);
-    draw_text(fig, y_header, x + panel_w / 2 - 6, std::to_string(i + 1), 4, 0.0F);
+    const index_t x = x0 + i * (panel_w + gap);
+    const std::string head = "touch " + std::to_string(i + 1) + (t.accepted ? "" : " (rejected)");
+    draw_text(fig, y_head, x + (panel_w - text_width(head, 2)) / 2, head, 2);
     // Tactile image, centred in the column; a rejected frame leaves a grey box.
-    const Eigen::Index tx = x + (panel_w - win.width * ts) / 2;
+    const index_t tx = x + (panel_w - win.width * ts) / 2;
     const auto& tact = run.tactile_images[static_cast<std::size_t>(i)];
-    if (tact.size() > 0)
-      blit_grey(fig, tact, y_tact, tx, ts);
-    else
-      blit_grey(fig, tacmap::image<float>::Constant(win.height, win.width, 0.5F), y_tact, tx, ts);
-    // Map with the true window (green) and the estimate's window (red).
-    blit_grey(fig, map, y_map, x, s, 0.8F);
-    const double ww = static_cast<double>(win.width), wh = static_cast<double>(win.height);
-    draw_rect(fig, y_map, x, s, t.estimate_x_mm / mm - ww / 2, t.estimate_y_mm / mm - wh / 2, ww,
-              wh, 0.9F, 0.1F, 0.1F);
-    draw_rect(fig, y_map, x, s, t.true_x_mm / mm - ww / 2, t.true_y_mm / mm - wh / 2, ww, wh, 0.1F,
-              0.8F, 0.1F);
-    // Belief heat map over the (dimmed) map: state (r, c) is drawn at its window centre.
+    blit_grey(fig,
+              tact.size() > 0 ? tact : tacmap::image<float>::Constant(win.height, win.width, 0.5F),
+              y_tact, tx, ts);
+    // Map with the true window (green, solid) and the estimate's (cyan, dashed, drawn last).
+    blit_grey(fig, map, y_map, x, s);
+    const auto window_box = [&](double cx_mm, double cy_mm, colour c, bool dashed) {
+      const double left = cx_mm / mm - ww / 2, top = cy_mm / mm - wh / 2;
+      draw_box(fig, y_map + std::lround(top * s), x + std::lround(left * s),
+               y_map + std::lround((top + wh) * s) - 1, x + std::lround((left + ww) * s) - 1, c,
+               dashed);
+    };
+    window_box(t.true_x_mm, t.true_y_mm, truth_colour, false);
+    window_box(t.estimate_x_mm, t.estimate_y_mm, estimate_colour, true);
+    // Belief over the whole map, then zoomed around the truth; truth first, estimate on top.
     const auto& bel = run.beliefs[static_cast<std::size_t>(i)];
-    const float peak = std::max(bel.maxCoeff(), 1e-30F);
-    for (Eigen::Index r = 0; r < panel_h; ++r)
-      for (Eigen::Index c = 0; c < panel_w; ++c) {
-        const float base = 0.35F * map(r / s, c / s);
-        const Eigen::Index br = r / s - win.height / 2, bc = c / s - win.width / 2;
-        float v = 0.0F;
-        if (br >= 0 && bc >= 0 && br < bel.rows() && bc < bel.cols())
-          v = std::sqrt(bel(br, bc) / peak);  // sqrt: keeps the weaker modes visible
-        const float a = std::min(1.0F, 3.0F * v);
-        const float red = std::clamp(3.0F * v, 0.0F, 1.0F);
-        const float green = std::clamp(3.0F * v - 1.0F, 0.0F, 1.0F);
-        const float blue = std::clamp(3.0F * v - 2.0F, 0.0F, 1.0F);
-        fig.set(y_bel + r, x + c, (1 - a) * base + a * red, (1 - a) * base + a * green,
-                (1 - a) * base + a * blue);
-      }
-    draw_cross(fig, y_bel + static_cast<Eigen::Index>(std::lround(t.true_y_mm / mm * s)),
-               x + static_cast<Eigen::Index>(std::lround(t.true_x_mm / mm * s)), 0.1F, 0.9F, 0.1F);
-    draw_text(fig, y_err, x + 4, one_decimal(t.error_mm) + " mm", 3, 0.0F);
+    draw_belief(fig, y_bel, x, panel_h, panel_w, bel, edges, win, s, 0.0, 0.0);
+    draw_ring(fig, y_bel + screen(t.true_y_mm), x + screen(t.true_x_mm), ring_radius);
+    draw_cross(fig, y_bel + screen(t.estimate_y_mm), x + screen(t.estimate_x_mm), 3, 7, 1);
+    const double zr0 = t.true_y_mm / mm - static_cast<double>(panel_h) / (2.0 * zoom);
+    const double zc0 = t.true_x_mm / mm - static_cast<double>(panel_w) / (2.0 * zoom);
+    draw_belief(fig, y_zoom, x, panel_h, panel_w, bel, edges, win, zoom, zr0, zc0);
+    const auto zoomed = [&](double v_mm, double origin) {
+      return static_cast<index_t>(std::lround((v_mm / mm - origin) * zoom));
+    };
+    draw_ring(fig, y_zoom + zoomed(t.true_y_mm, zr0), x + zoomed(t.true_x_mm, zc0),
+              5.0 / mm * zoom);
+    const index_t er = zoomed(t.estimate_y_mm, zr0), ec = zoomed(t.estimate_x_mm, zc0);
+    if (er >= 16 && ec >= 16 && er < panel_h - 16 && ec < panel_w - 16)
+      draw_cross(fig, y_zoom + er, x + ec, 5, 18, 2);
+    else
+      draw_text(fig, y_zoom + panel_h - 22, x + 6, "+ off this view", 2, estimate_colour);
+    // The numbers: the error, the belief's entropy, its claim and verdict.
+    draw_lines(
+        fig, y_num, x,
+        {"error " + fixed(t.error_mm, 1) + " mm", "entropy " + fixed(t.entropy_nats, 2) + " nats",
+         "P(err<=5mm) " + fixed(t.probability_within, 2),
+         "-> " + std::string(tacmap::to_string(t.verdict))},
+        2, line);
     if (appearance_row && t.appearance_probability.size() == 2) {
       // P(raised parts look dark) as the orange share of the bar, its value under it.
       const double dark = t.appearance_probability[1];
-      const auto split =
-          static_cast<Eigen::Index>(std::lround(dark * static_cast<double>(panel_w)));
-      for (Eigen::Index r = 0; r < bar_h; ++r)
-        for (Eigen::Index c = 0; c < panel_w; ++c) {
-          if (c < split)
-            fig.set(y_app + r, x + c, 0.95F, 0.55F, 0.1F);
-          else
-            fig.set(y_app + r, x + c, 0.25F, 0.45F, 0.85F);
-        }
-      char text[16];
-      std::snprintf(text, sizeof text, "%.2f", dark);
-      draw_text(fig, y_app + bar_h + 3, x + 4, text, 3, 0.0F);
+      const auto split = static_cast<index_t>(std::lround(dark * static_cast<double>(panel_w)));
+      fill(fig, y_app, x, bar_h, split, dark_colour);
+      fill(fig, y_app, x + split, bar_h, panel_w - split, bright_colour);
+      draw_text(fig, y_app + bar_h + 4, x, "P(dark) " + fixed(dark, 2), 2);
     }
   }
-  tacmap::write_png_rgb(png, fig);
+  if (appearance_row) {  // the posterior of the photo-versus-touch relation
+    draw_lines(fig, y_app - 4, margin, {"photo vs touch: do", "raised parts look"}, 2, line);
+    const index_t after = draw_text(fig, y_app + 2 * line - 4, margin, "dark", 2, dark_colour);
+    const index_t after_or = draw_text(fig, y_app + 2 * line - 4, after, " or ", 2);
+    draw_text(fig, y_app + 2 * line - 4, after_or, "bright?", 2, bright_colour);
+  }
+  draw_lines(
+      fig, y_num, margin,
+      {"after the touch:", "the estimate's error,", "the belief's entropy,", "claim and verdict"},
+      2, line, grey);
+
+  draw_lines(fig, y_key, margin, key_lines, 2, line);
+  tacmap::write_png_compressed(png, fig);
+  check_figure(png, fig);
 }
 
 void print_run(const tacmap::sequence_result& run) {
@@ -306,11 +600,20 @@ int main(int argc, char** argv) try {
               ideal ? "ideal" : "realistic (camera map, misregistration, press jitter)");
   print_run(run);
   const std::filesystem::path gecko_png = std::filesystem::absolute(out_dir / "gecko_demo.png");
+  const std::string scenario_words =
+      ideal ? "ideal scenario (the sensor presses the map's own image)"
+            : "realistic scenario (camera map, misregistration, press jitter, worn sensor)";
+  const std::string model_words =
+      "model: " + config.name() + " (the library's default); " + scenario_words;
   write_figure(gecko_png, run, experiment.visual_map(),
-               experiment.filter().grid().base().window_size(), protocol.mm_per_px, false);
+               experiment.filter().grid().base().window_size(), protocol.mm_per_px, false,
+               {"gecko_demo: " + std::to_string(run.touches.size()) +
+                    " touches on the bundled gecko (sequence 0, the path of the paper's Fig. 5)",
+                model_words});
   std::printf(
-      "figure (like the paper's Fig. 5; columns = touches; rows = tactile image, map with true "
-      "window green / estimate red, belief heat map with true centre, error):\n  %s\n\n",
+      "figure (like the paper's Fig. 5, its key inside; columns = touches; rows = tactile "
+      "image, map with the true window green / estimate cyan, belief on a log scale, zoomed "
+      "belief, numbers):\n  %s\n\n",
       gecko_png.string().c_str());
 
   // 2. The horse: a dark object on a light background — the same default model, not told.
@@ -326,7 +629,11 @@ int main(int argc, char** argv) try {
   print_run(horse_run);
   const std::filesystem::path horse_png = std::filesystem::absolute(out_dir / "horse_demo.png");
   write_figure(horse_png, horse_run, horse_experiment.visual_map(),
-               horse_experiment.filter().grid().base().window_size(), horse.mm_per_px, true);
+               horse_experiment.filter().grid().base().window_size(), horse.mm_per_px, true,
+               {"gecko_demo: " + std::to_string(horse_run.touches.size()) +
+                    " touches on a photo of a dark horse on white (data/horse): raised parts "
+                    "look dark",
+                model_words});
   std::printf(
       "figure (as above, plus a bar per touch: orange share = P(raised parts look dark), "
       "blue = P(bright)):\n  %s\n",
