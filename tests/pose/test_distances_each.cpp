@@ -207,8 +207,9 @@ TEST_CASE("distances_each in groups: each column is the sum of its group's dista
 }
 
 TEST_CASE_TEMPLATE("add_row matches add_row_scalar", T, float, double) {
-  // Lengths around the SIMD width; unaligned starts (src + 1, dst + 3).
-  constexpr Eigen::Index width = tacmap::detail::descriptor_tiles<T>::width;
+  // Lengths around the SIMD width (a register's, not a tile row's); unaligned starts (src + 1,
+  // dst + 3).
+  constexpr auto width = static_cast<Eigen::Index>(xsimd::batch<T>::size);
   std::mt19937 rng(21);
   for (const Eigen::Index n : {Eigen::Index{0}, Eigen::Index{1}, width - 1, width, width + 1,
                                3 * width + 2, Eigen::Index{103}}) {

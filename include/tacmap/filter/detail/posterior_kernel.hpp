@@ -3,7 +3,9 @@
 // bel(x) = eta * bel_bar(x) * exp(ll(x) - max ll)  (paper, Table 1, with log-likelihoods).
 // Two passes: scan (maximum, first NaN) and weight (multiply by exp, accumulate the sum). Each
 // kernel has a plain scalar reference next to it; tests compare the two with tolerances (xsimd's
-// exp and FMA contraction differ from std::exp in the last bits).
+// exp and FMA contraction differ from std::exp in the last bits). As in distance_kernel.hpp,
+// `*_simd<A>` is architecture A's kernel and the entry points without the suffix choose A: the
+// compile-time one, or for float with tacmap::precompiled the CPU's best (tacmap/simd.hpp).
 #pragma once
 
 #include <Eigen/Core>
@@ -11,7 +13,10 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <type_traits>
 #include <xsimd/xsimd.hpp>
+
+#include "tacmap/simd.hpp"
 
 namespace tacmap::detail {
 
@@ -43,16 +48,18 @@ log_likelihood_scan<T> scan_log_likelihood_scalar(const T* ll, Eigen::Index n) {
   return s;
 }
 
-template <class T>
-log_likelihood_scan<T> scan_log_likelihood(const T* ll, Eigen::Index n) {
-  using batch = xsimd::batch<T>;
+template <class A, class T>
+log_likelihood_scan<T> scan_log_likelihood_simd(const T* ll, Eigen::Index n) {
+  using batch = xsimd::batch<T, A>;
   constexpr auto width = static_cast<Eigen::Index>(batch::size);
   const Eigen::Index vec_end = n - n % width;
   batch top(-std::numeric_limits<T>::infinity());
   auto nan_seen = batch(T(0)) != batch(T(0));  // all false
   for (Eigen::Index i = 0; i < vec_end; i += width) {
     const batch v = batch::load_unaligned(ll + i);
-    nan_seen = nan_seen || (v != v);
+    // xsimd::isnan, not v != v: xsimd 8.1's AVX `!=` is an ordered compare (_CMP_NEQ_OQ), false
+    // for NaN, so an AVX2 build missed a NaN in the vector body (found by the dispatch tests).
+    nan_seen = nan_seen || xsimd::isnan(v);
     top = xsimd::max(top, v);
   }
   if (xsimd::any(nan_seen)) return scan_log_likelihood_scalar(ll, n);  // locate it (rare path)
@@ -65,6 +72,14 @@ log_likelihood_scan<T> scan_log_likelihood(const T* ll, Eigen::Index n) {
   }
   for (const T lane : lanes) s.max = std::max(s.max, lane);
   return s;
+}
+
+template <class T>
+log_likelihood_scan<T> scan_log_likelihood(const T* ll, Eigen::Index n) {
+#if defined(TACMAP_PRECOMPILED) && TACMAP_PRECOMPILED
+  if constexpr (std::is_same_v<T, float>) return active_kernels().scan_log_likelihood(ll, n);
+#endif
+  return scan_log_likelihood_simd<kernel_arch<T>>(ll, n);
 }
 
 /// The two sums of the weighting pass: the unnormalised posterior's, and the likelihood
@@ -91,9 +106,9 @@ weight_sums weight_by_likelihood_scalar(const T* prior, const T* ll, T top, T* o
   return sums;
 }
 
-template <class T>
-weight_sums weight_by_likelihood(const T* prior, const T* ll, T top, T* out, Eigen::Index n) {
-  using batch = xsimd::batch<T>;
+template <class A, class T>
+weight_sums weight_by_likelihood_simd(const T* prior, const T* ll, T top, T* out, Eigen::Index n) {
+  using batch = xsimd::batch<T, A>;
   constexpr auto width = static_cast<Eigen::Index>(batch::size);
   const Eigen::Index vec_end = n - n % width;
   const batch floor(log_factor_floor<T>());
@@ -114,6 +129,15 @@ weight_sums weight_by_likelihood(const T* prior, const T* ll, T top, T* out, Eig
   sums.posterior += static_cast<double>(xsimd::hadd(sum));
   sums.likelihood += static_cast<double>(xsimd::hadd(factor_sum));
   return sums;
+}
+
+template <class T>
+weight_sums weight_by_likelihood(const T* prior, const T* ll, T top, T* out, Eigen::Index n) {
+#if defined(TACMAP_PRECOMPILED) && TACMAP_PRECOMPILED
+  if constexpr (std::is_same_v<T, float>)
+    return active_kernels().weight_by_likelihood(prior, ll, top, out, n);
+#endif
+  return weight_by_likelihood_simd<kernel_arch<T>>(prior, ll, top, out, n);
 }
 
 }  // namespace tacmap::detail

@@ -9,6 +9,12 @@
 // (one FMA per element; the tiles keep ||F||^2), and recomputed from differences wherever that
 // expansion would cancel (near a match, d -> 0: a touch against its own window), so that an
 // exact match still gives exactly 0.
+//
+// Instruction sets: each kernel is a template on an xsimd architecture A (`*_simd<A>`). The
+// entry points without the suffix use `kernel_arch<T>` (the compile-time default) header-only;
+// with tacmap::precompiled (TACMAP_PRECOMPILED) their float versions call the kernels compiled
+// for the CPU's best level instead (tacmap/simd.hpp). A tile row is 32 bytes for every A, so one
+// layout serves every level: an SSE2 register reads half a row.
 #pragma once
 
 #include <Eigen/Core>
@@ -21,6 +27,7 @@
 
 #include "tacmap/config.hpp"
 #include "tacmap/image.hpp"
+#include "tacmap/simd.hpp"
 
 namespace tacmap::detail {
 
@@ -28,8 +35,9 @@ namespace tacmap::detail {
 template <class T>
 class descriptor_tiles {
  public:
-  using batch = xsimd::batch<T>;
-  static constexpr auto width = static_cast<Eigen::Index>(batch::size);
+  /// Positions per tile: one 32-byte row per element (8 floats, 4 doubles) whatever the
+  /// instruction set, so tiles built in one translation unit suit the kernels of every level.
+  static constexpr auto width = static_cast<Eigen::Index>(tile_row_bytes / sizeof(T));
 
   descriptor_tiles() = default;
   /// From descriptors as columns (dimension x positions).
@@ -65,14 +73,17 @@ class descriptor_tiles {
   [[nodiscard]] Eigen::Index positions() const { return positions_; }
   [[nodiscard]] Eigen::Index dimension() const { return dim_; }
   [[nodiscard]] const T* tile(Eigen::Index t) const { return data_.data() + t * dim_ * width; }
-  /// Squared norms ||F(q)||^2 of tile t's positions (one register; padding 0).
-  [[nodiscard]] const T* squared_norms(Eigen::Index t) const { return norms_.data() + t * width; }
+  /// Squared norms ||F(q)||^2 from position q on (padding 0; tile-aligned for q a multiple of a
+  /// register's width).
+  [[nodiscard]] const T* squared_norms_from(Eigen::Index q) const { return norms_.data() + q; }
 
  private:
   Eigen::Index positions_ = 0;
   Eigen::Index dim_ = 0;
-  std::vector<T, xsimd::aligned_allocator<T>> data_;
-  std::vector<T, xsimd::aligned_allocator<T>> norms_;
+  // 64-byte aligned whatever the flags of the translation unit that builds them: the kernels of
+  // any level load their registers aligned.
+  std::vector<T, xsimd::aligned_allocator<T, 64>> data_;
+  std::vector<T, xsimd::aligned_allocator<T, 64>> norms_;
 };
 
 /// Plain reference: out(q) (+)= sum_{n in [first, first+count)} || F(q) - g.col(n) ||.
@@ -95,13 +106,37 @@ void accumulate_distances_scalar(const descriptor_tiles<T>& f,
 
 namespace distance_kernel {
 
-// Writes (or, when `add`, adds) one tile's values at out[first, first + width); the last, partial
-// tile writes only the real positions.
-template <class T>
-void store_tile(const xsimd::batch<T>& v, T* out, Eigen::Index first, Eigen::Index positions,
+// Registers of architecture A: "register tile" r holds positions [r * width, (r + 1) * width),
+// a whole tile or part of one (an SSE2 register is half a 32-byte tile row).
+template <class A, class T>
+constexpr Eigen::Index register_width() {
+  constexpr auto w = static_cast<Eigen::Index>(xsimd::batch<T, A>::size);
+  static_assert(descriptor_tiles<T>::width % w == 0, "a tile row must hold whole registers");
+  return w;
+}
+
+// Element 0 of register tile r; element k is descriptor_tiles<T>::width values further on.
+template <class A, class T>
+const T* register_tile(const descriptor_tiles<T>& f, Eigen::Index r) {
+  constexpr Eigen::Index row = descriptor_tiles<T>::width;
+  const Eigen::Index first = r * register_width<A, T>();
+  return f.tile(first / row) + first % row;
+}
+
+// Register tiles covering f's positions.
+template <class A, class T>
+Eigen::Index register_tiles(const descriptor_tiles<T>& f) {
+  constexpr Eigen::Index width = register_width<A, T>();
+  return (f.positions() + width - 1) / width;
+}
+
+// Writes (or, when `add`, adds) one register tile's values at out[first, first + width); the
+// last, partial tile writes only the real positions.
+template <class A, class T>
+void store_tile(const xsimd::batch<T, A>& v, T* out, Eigen::Index first, Eigen::Index positions,
                 bool add) {
-  using batch = xsimd::batch<T>;
-  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+  using batch = xsimd::batch<T, A>;
+  constexpr Eigen::Index width = register_width<A, T>();
   T* o = out + first;
   if (first + width <= positions) {
     (add ? batch::load_unaligned(o) + v : v).store_unaligned(o);
@@ -117,17 +152,17 @@ void store_tile(const xsimd::batch<T>& v, T* out, Eigen::Index first, Eigen::Ind
 // the expansion ||F||^2 + ||g||^2 - 2 F.g, or, where a lane lands below 1/64 of
 // ||F||^2 + ||g||^2 (a near match, where the expansion cancels), recomputed from differences
 // over the tile's elements `ti` against g_k(k) (element k of g, broadcast). Clamped at 0.
-template <class T, class G>
-xsimd::batch<T> squared_distance(const xsimd::batch<T>& dot, const xsimd::batch<T>& nf, T ng,
-                                 const T* ti, Eigen::Index dim, const G& g_k) {
-  using batch = xsimd::batch<T>;
-  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+template <class A, class T, class G>
+xsimd::batch<T, A> squared_distance(const xsimd::batch<T, A>& dot, const xsimd::batch<T, A>& nf,
+                                    T ng, const T* ti, Eigen::Index dim, const G& g_k) {
+  using batch = xsimd::batch<T, A>;
+  constexpr Eigen::Index row = descriptor_tiles<T>::width;
   const batch both = nf + batch(ng);
   batch d2 = xsimd::fnma(batch(T(2)), dot, both);
   if (xsimd::any(d2 < both * batch(T(1) / T(64)))) {
     d2 = batch(T(0));
     for (Eigen::Index k = 0; k < dim; ++k) {
-      const batch d = batch::load_aligned(ti + k * width) - g_k(k);
+      const batch d = batch::load_aligned(ti + k * row) - g_k(k);
       d2 = xsimd::fma(d, d, d2);
     }
   }
@@ -145,45 +180,49 @@ xsimd::batch<T> squared_distance(const xsimd::batch<T>& dot, const xsimd::batch<
 // an FMA (measured: the whole shared-dense measurement 9 % faster, per window 10 %); near a
 // match `squared_distance` recomputes from differences (rare; elsewhere the relative error of
 // the distance stays below ~1e-5), so an exact match is 0.
-template <std::size_t Tiles, std::size_t Count, class T>
-void block(const descriptor_tiles<T>& f, Eigen::Index t0, const xsimd::batch<T>* gb, const T* gn,
+template <std::size_t Tiles, std::size_t Count, class A, class T>
+void block(const descriptor_tiles<T>& f, Eigen::Index t0, const xsimd::batch<T, A>* gb, const T* gn,
            T* out, bool add) {
-  using batch = xsimd::batch<T>;
-  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+  using batch = xsimd::batch<T, A>;
+  constexpr Eigen::Index width = register_width<A, T>();
+  constexpr Eigen::Index row = descriptor_tiles<T>::width;
   const Eigen::Index dim = f.dimension();
   batch acc[Tiles][Count];
-  for (std::size_t i = 0; i < Tiles; ++i)
+  const T* tile[Tiles];
+  for (std::size_t i = 0; i < Tiles; ++i) {
+    tile[i] = register_tile<A>(f, t0 + static_cast<Eigen::Index>(i));
     for (std::size_t j = 0; j < Count; ++j) acc[i][j] = batch(T(0));
-  const T* tile = f.tile(t0);
-  const Eigen::Index tile_stride = dim * width;
+  }
   for (Eigen::Index k = 0; k < dim; ++k) {
     for (std::size_t i = 0; i < Tiles; ++i) {
-      const batch v =
-          batch::load_aligned(tile + static_cast<Eigen::Index>(i) * tile_stride + k * width);
+      const batch v = batch::load_aligned(tile[i] + k * row);
       for (std::size_t j = 0; j < Count; ++j)
         acc[i][j] = xsimd::fma(v, gb[static_cast<Eigen::Index>(j) * dim + k], acc[i][j]);
     }
   }
   for (std::size_t i = 0; i < Tiles; ++i) {
-    const batch nf = batch::load_aligned(f.squared_norms(t0 + static_cast<Eigen::Index>(i)));
+    const Eigen::Index first = (t0 + static_cast<Eigen::Index>(i)) * width;
+    const batch nf = batch::load_aligned(f.squared_norms_from(first));
     batch total(T(0));
-    const T* ti = tile + static_cast<Eigen::Index>(i) * tile_stride;
     for (std::size_t j = 0; j < Count; ++j) {
-      const xsimd::batch<T>* gj = gb + static_cast<Eigen::Index>(j) * dim;
-      total += xsimd::sqrt(
-          squared_distance(acc[i][j], nf, gn[j], ti, dim, [gj](Eigen::Index k) { return gj[k]; }));
+      const batch* gj = gb + static_cast<Eigen::Index>(j) * dim;
+      total += xsimd::sqrt(squared_distance(acc[i][j], nf, gn[j], tile[i], dim,
+                                            [gj](Eigen::Index k) { return gj[k]; }));
     }
-    store_tile(total, out, (t0 + static_cast<Eigen::Index>(i)) * width, f.positions(), add);
+    store_tile(total, out, first, f.positions(), add);
   }
 }
 
 // All tiles against Count descriptors: blocks of about 8-9 independent accumulator chains, then
 // the remaining tiles one by one.
-template <std::size_t Count, class T>
-void tiles(const descriptor_tiles<T>& f, const T* g, Eigen::Index g_stride,
-           std::vector<xsimd::batch<T>, xsimd::aligned_allocator<xsimd::batch<T>>>& gb, T* out,
-           bool add) {
-  using batch = xsimd::batch<T>;
+template <class A, class T>
+using batch_vector =
+    std::vector<xsimd::batch<T, A>, xsimd::aligned_allocator<xsimd::batch<T, A>, 64>>;
+
+template <std::size_t Count, class A, class T>
+void tiles(const descriptor_tiles<T>& f, const T* g, Eigen::Index g_stride, batch_vector<A, T>& gb,
+           T* out, bool add) {
+  using batch = xsimd::batch<T, A>;
   constexpr std::size_t per_block = Count >= 3 ? 3 : (Count == 2 ? 4 : 8);
   const Eigen::Index dim = f.dimension();
   constexpr auto n = static_cast<Eigen::Index>(Count);
@@ -198,8 +237,7 @@ void tiles(const descriptor_tiles<T>& f, const T* g, Eigen::Index g_stride,
       norm += v * v;
     }
   }
-  constexpr Eigen::Index width = descriptor_tiles<T>::width;
-  const Eigen::Index count = (f.positions() + width - 1) / width;
+  const Eigen::Index count = register_tiles<A>(f);
   Eigen::Index t = 0;
   constexpr auto step = static_cast<Eigen::Index>(per_block);
   for (; t + step <= count; t += step) block<per_block, Count>(f, t, gb.data(), gn, out, add);
@@ -210,14 +248,15 @@ void tiles(const descriptor_tiles<T>& f, const T* g, Eigen::Index g_stride,
 
 /// out(q) (+)= sum_{n in [first, first+count)} || F(q) - g.col(n) || for every position q: added
 /// to out when `add`, else stored (saves clearing a buffer that is about to be overwritten).
-template <class T>
-void accumulate_distances(const descriptor_tiles<T>& f,
-                          const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g,
-                          Eigen::Index first, Eigen::Index count, T* out, bool add = true) {
+/// Architecture A's kernel; `accumulate_distances` chooses A.
+template <class A, class T>
+void accumulate_distances_simd(const descriptor_tiles<T>& f,
+                               const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g,
+                               Eigen::Index first, Eigen::Index count, T* out, bool add = true) {
   const Eigen::Index stride = g.rows();
   // Pre-broadcast tactile descriptors; a few KB, allocated per call (negligible next to the
   // pass over the map's descriptors).
-  std::vector<xsimd::batch<T>, xsimd::aligned_allocator<xsimd::batch<T>>> gb;
+  distance_kernel::batch_vector<A, T> gb;
   for (Eigen::Index n = first; n < first + count;) {
     const T* gn = g.data() + n * stride;
     switch (std::min<Eigen::Index>(first + count - n, 3)) {
@@ -238,36 +277,50 @@ void accumulate_distances(const descriptor_tiles<T>& f,
   }
 }
 
+/// `accumulate_distances_simd` on the compile-time architecture, or (float, with
+/// tacmap::precompiled) on the CPU's best level.
+template <class T>
+void accumulate_distances(const descriptor_tiles<T>& f,
+                          const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g,
+                          Eigen::Index first, Eigen::Index count, T* out, bool add = true) {
+#if defined(TACMAP_PRECOMPILED) && TACMAP_PRECOMPILED
+  if constexpr (std::is_same_v<T, float>) {
+    active_kernels().accumulate_distances(f, g, first, count, out, add);
+    return;
+  }
+#endif
+  accumulate_distances_simd<kernel_arch<T>>(f, g, first, count, out, add);
+}
+
 namespace distance_kernel {
 
 // Tiles consecutive tiles against one descriptor g in a sum/difference basis (elements [0, half):
 // sums S, [half, dim): differences D, see `accumulate_sign_pair`): two accumulators per tile,
 // F_S.g_S and F_D.g_D, give both F.g = S + D and F.g^- = S - D for g^- = (g_S, -g_D). Four tiles
 // keep eight independent FMA chains in flight, like `block`.
-template <std::size_t Tiles, class T>
-void pair_block(const descriptor_tiles<T>& f, Eigen::Index t0, const xsimd::batch<T>* gb, T gn,
+template <std::size_t Tiles, class A, class T>
+void pair_block(const descriptor_tiles<T>& f, Eigen::Index t0, const xsimd::batch<T, A>* gb, T gn,
                 Eigen::Index half, T* plus, T* minus, bool add) {
-  using batch = xsimd::batch<T>;
-  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+  using batch = xsimd::batch<T, A>;
+  constexpr Eigen::Index width = register_width<A, T>();
+  constexpr Eigen::Index row = descriptor_tiles<T>::width;
   const Eigen::Index dim = f.dimension();
   batch sum[Tiles], diff[Tiles];
-  for (std::size_t i = 0; i < Tiles; ++i) sum[i] = diff[i] = batch(T(0));
-  const T* tile = f.tile(t0);
-  const Eigen::Index tile_stride = dim * width;
+  const T* tile[Tiles];
+  for (std::size_t i = 0; i < Tiles; ++i) {
+    sum[i] = diff[i] = batch(T(0));
+    tile[i] = register_tile<A>(f, t0 + static_cast<Eigen::Index>(i));
+  }
   for (Eigen::Index k = 0; k < half; ++k)
     for (std::size_t i = 0; i < Tiles; ++i)
-      sum[i] = xsimd::fma(
-          batch::load_aligned(tile + static_cast<Eigen::Index>(i) * tile_stride + k * width), gb[k],
-          sum[i]);
+      sum[i] = xsimd::fma(batch::load_aligned(tile[i] + k * row), gb[k], sum[i]);
   for (Eigen::Index k = half; k < dim; ++k)
     for (std::size_t i = 0; i < Tiles; ++i)
-      diff[i] = xsimd::fma(
-          batch::load_aligned(tile + static_cast<Eigen::Index>(i) * tile_stride + k * width), gb[k],
-          diff[i]);
+      diff[i] = xsimd::fma(batch::load_aligned(tile[i] + k * row), gb[k], diff[i]);
   for (std::size_t i = 0; i < Tiles; ++i) {
     const Eigen::Index t = t0 + static_cast<Eigen::Index>(i);
-    const batch nf = batch::load_aligned(f.squared_norms(t));
-    const T* ti = tile + static_cast<Eigen::Index>(i) * tile_stride;
+    const batch nf = batch::load_aligned(f.squared_norms_from(t * width));
+    const T* ti = tile[i];
     const batch p = xsimd::sqrt(squared_distance(sum[i] + diff[i], nf, gn, ti, dim,
                                                  [gb](Eigen::Index k) { return gb[k]; }));
     const batch m =
@@ -288,26 +341,40 @@ void pair_block(const descriptor_tiles<T>& f, Eigen::Index t0, const xsimd::batc
 ///   plus(q)  (+)= || F(q) - g ||       and       minus(q) (+)= || F(q) - P g ||
 /// share every product: F.g = F_S.g_S + F_D.g_D, F.Pg = F_S.g_S - F_D.g_D — two distances for
 /// the multiply-adds of one. `g`: one descriptor in that basis (f.dimension() values). Added to
-/// the outputs when `add`, else stored.
-template <class T>
-void accumulate_sign_pair(const descriptor_tiles<T>& f, const T* g, Eigen::Index half, T* plus,
-                          T* minus, bool add) {
-  using batch = xsimd::batch<T>;
+/// the outputs when `add`, else stored. Architecture A's kernel; `accumulate_sign_pair`
+/// chooses A.
+template <class A, class T>
+void accumulate_sign_pair_simd(const descriptor_tiles<T>& f, const T* g, Eigen::Index half, T* plus,
+                               T* minus, bool add) {
+  using batch = xsimd::batch<T, A>;
   const Eigen::Index dim = f.dimension();
   TACMAP_ASSERT(half >= 0 && half <= dim, "accumulate_sign_pair: half out of range");
-  std::vector<batch, xsimd::aligned_allocator<batch>> gb(static_cast<std::size_t>(dim));
+  distance_kernel::batch_vector<A, T> gb(static_cast<std::size_t>(dim));
   T gn = 0;
   for (Eigen::Index k = 0; k < dim; ++k) {
     gb[static_cast<std::size_t>(k)] = batch(g[k]);
     gn += g[k] * g[k];
   }
-  constexpr Eigen::Index width = descriptor_tiles<T>::width;
-  const Eigen::Index count = (f.positions() + width - 1) / width;
+  const Eigen::Index count = distance_kernel::register_tiles<A>(f);
   Eigen::Index t = 0;
   for (; t + 4 <= count; t += 4)
     distance_kernel::pair_block<4>(f, t, gb.data(), gn, half, plus, minus, add);
   for (; t < count; ++t)
     distance_kernel::pair_block<1>(f, t, gb.data(), gn, half, plus, minus, add);
+}
+
+/// `accumulate_sign_pair_simd` on the compile-time architecture, or (float, with
+/// tacmap::precompiled) on the CPU's best level.
+template <class T>
+void accumulate_sign_pair(const descriptor_tiles<T>& f, const T* g, Eigen::Index half, T* plus,
+                          T* minus, bool add) {
+#if defined(TACMAP_PRECOMPILED) && TACMAP_PRECOMPILED
+  if constexpr (std::is_same_v<T, float>) {
+    active_kernels().accumulate_sign_pair(f, g, half, plus, minus, add);
+    return;
+  }
+#endif
+  accumulate_sign_pair_simd<kernel_arch<T>>(f, g, half, plus, minus, add);
 }
 
 /// Plain reference of `accumulate_sign_pair`.
@@ -397,32 +464,33 @@ namespace distance_kernel {
 // only wants their sum (all pairs of one heading) never writes the single distances. It stays
 // a second loop: one shared function filling the accumulators through a reference measured
 // 51 -> 75 us (planar) and 2.1 -> 3.2 ms (36 headings).
-template <std::size_t Tiles, std::size_t Count, bool Sum, class T>
+template <std::size_t Tiles, std::size_t Count, bool Sum, class A, class T>
 void block_each(const descriptor_tiles<T>& f, Eigen::Index t0, const T* g, Eigen::Index g_stride,
                 const T* gn, T* out, Eigen::Index out_stride, Eigen::Index origin,
                 bool add = false) {
-  using batch = xsimd::batch<T>;
-  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+  using batch = xsimd::batch<T, A>;
+  constexpr Eigen::Index width = register_width<A, T>();
+  constexpr Eigen::Index row = descriptor_tiles<T>::width;
   const Eigen::Index dim = f.dimension();
   batch acc[Tiles][Count];
-  for (std::size_t i = 0; i < Tiles; ++i)
+  const T* tile[Tiles];
+  for (std::size_t i = 0; i < Tiles; ++i) {
+    tile[i] = register_tile<A>(f, t0 + static_cast<Eigen::Index>(i));
     for (std::size_t j = 0; j < Count; ++j) acc[i][j] = batch(T(0));
-  const T* tile = f.tile(t0);
-  const Eigen::Index tile_stride = dim * width;
+  }
   for (Eigen::Index k = 0; k < dim; ++k) {
     batch gk[Count];
     for (std::size_t j = 0; j < Count; ++j)
       gk[j] = batch(g[static_cast<Eigen::Index>(j) * g_stride + k]);
     for (std::size_t i = 0; i < Tiles; ++i) {
-      const batch v =
-          batch::load_aligned(tile + static_cast<Eigen::Index>(i) * tile_stride + k * width);
+      const batch v = batch::load_aligned(tile[i] + k * row);
       for (std::size_t j = 0; j < Count; ++j) acc[i][j] = xsimd::fma(v, gk[j], acc[i][j]);
     }
   }
   for (std::size_t i = 0; i < Tiles; ++i) {
     const Eigen::Index first = (t0 + static_cast<Eigen::Index>(i)) * width;
-    const batch nf = batch::load_aligned(f.squared_norms(t0 + static_cast<Eigen::Index>(i)));
-    const T* ti = tile + static_cast<Eigen::Index>(i) * tile_stride;
+    const batch nf = batch::load_aligned(f.squared_norms_from(first));
+    const T* ti = tile[i];
     batch total(T(0));
     for (std::size_t j = 0; j < Count; ++j) {
       const T* gj = g + static_cast<Eigen::Index>(j) * g_stride;
@@ -449,11 +517,11 @@ inline bool needed(const position_range* ranges, Eigen::Index j, Eigen::Index n,
   return false;
 }
 
-template <std::size_t Tiles, class T>
+template <std::size_t Tiles, class A, class T>
 void each_descriptor(const descriptor_tiles<T>& f, Eigen::Index t0,
                      const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, const T* gn, T* out,
                      Eigen::Index out_stride, const position_range* ranges, Eigen::Index origin) {
-  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+  constexpr Eigen::Index width = register_width<A, T>();
   constexpr auto tiles = static_cast<Eigen::Index>(Tiles);
   const Eigen::Index stride = g.rows();
   const Eigen::Index count = g.cols();
@@ -463,19 +531,19 @@ void each_descriptor(const descriptor_tiles<T>& f, Eigen::Index t0,
   Eigen::Index j = 0;
   for (; j + 3 <= count; j += 3, gj += 3 * stride, nj += 3, oj += 3 * out_stride)
     if (needed(ranges, j, 3, t0, tiles, width))
-      block_each<Tiles, 3, false>(f, t0, gj, stride, nj, oj, out_stride, origin);
+      block_each<Tiles, 3, false, A>(f, t0, gj, stride, nj, oj, out_stride, origin);
   for (; j < count; ++j, gj += stride, ++nj, oj += out_stride)
     if (needed(ranges, j, 1, t0, tiles, width))
-      block_each<Tiles, 1, false>(f, t0, gj, stride, nj, oj, out_stride, origin);
+      block_each<Tiles, 1, false, A>(f, t0, gj, stride, nj, oj, out_stride, origin);
 }
 
 // Groups of `group` consecutive descriptors, each group's distances summed into one column.
-template <std::size_t Tiles, class T>
+template <std::size_t Tiles, class A, class T>
 void each_group(const descriptor_tiles<T>& f, Eigen::Index t0,
                 const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, const T* gn,
                 Eigen::Index group, T* out, Eigen::Index out_stride, const position_range* ranges,
                 Eigen::Index origin) {
-  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+  constexpr Eigen::Index width = register_width<A, T>();
   constexpr auto tiles = static_cast<Eigen::Index>(Tiles);
   const Eigen::Index stride = g.rows();
   const Eigen::Index groups = g.cols() / group;
@@ -485,11 +553,11 @@ void each_group(const descriptor_tiles<T>& f, Eigen::Index t0,
     T* oc = out + c * out_stride;
     Eigen::Index j = j0;
     for (; j + 3 <= j0 + group; j += 3)
-      block_each<Tiles, 3, true>(f, t0, g.data() + j * stride, stride, gn + j, oc, out_stride,
-                                 origin, j > j0);
+      block_each<Tiles, 3, true, A>(f, t0, g.data() + j * stride, stride, gn + j, oc, out_stride,
+                                    origin, j > j0);
     for (; j < j0 + group; ++j)
-      block_each<Tiles, 1, true>(f, t0, g.data() + j * stride, stride, gn + j, oc, out_stride,
-                                 origin, j > j0);
+      block_each<Tiles, 1, true, A>(f, t0, g.data() + j * stride, stride, gn + j, oc, out_stride,
+                                    origin, j > j0);
   }
 }
 
@@ -506,10 +574,10 @@ struct tile_range {
 /// (a band's distances into a layer, and their sum for the off-map mean): ~10,000 rows of ~100
 /// values per touch, where Eigen's add-then-sum expression cost a second pass and its reduction's
 /// set-up per row.
-template <class T>
-T add_row(const T* src, T* dst, Eigen::Index n, xsimd::batch<T>& acc) {
-  using batch = xsimd::batch<T>;
-  constexpr Eigen::Index width = descriptor_tiles<T>::width;
+template <class T, class A>
+T add_row(const T* src, T* dst, Eigen::Index n, xsimd::batch<T, A>& acc) {
+  using batch = xsimd::batch<T, A>;
+  constexpr auto width = static_cast<Eigen::Index>(batch::size);
   Eigen::Index i = 0;
   for (; i + width <= n; i += width) {
     const batch v = batch::load_unaligned(src + i);
@@ -560,28 +628,48 @@ void squared_norms(const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, std
 /// `group` > 1: column c of `out` receives the SUM over descriptors [c * group, (c + 1) * group)
 /// instead (g.cols() must be a multiple of group) — what the all-pairs measurement wants per
 /// heading, without writing and re-reading the single distances.
+///
+/// Architecture A's kernel; `distances_each` chooses A.
+template <class A, class T>
+void distances_each_simd(const descriptor_tiles<T>& f,
+                         const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, const T* g_norms,
+                         T* out, Eigen::Index out_stride, const position_range* ranges = nullptr,
+                         tile_range tiles = {}, Eigen::Index group = 1) {
+  // `tiles` counts whole tiles (rows of descriptor_tiles<T>::width); the kernels count
+  // registers, `per` to a tile.
+  constexpr Eigen::Index per = descriptor_tiles<T>::width / distance_kernel::register_width<A, T>();
+  const Eigen::Index all = distance_kernel::register_tiles<A>(f);
+  const Eigen::Index count = tiles.end < 0 ? all : std::min(tiles.end * per, all);
+  const Eigen::Index origin = tiles.begin * descriptor_tiles<T>::width;
+  Eigen::Index t = tiles.begin * per;
+  if (group > 1) {
+    TACMAP_ASSERT(g.cols() % group == 0, "distances_each: descriptors not a multiple of group");
+    for (; t + 3 <= count; t += 3)
+      distance_kernel::each_group<3, A>(f, t, g, g_norms, group, out, out_stride, ranges, origin);
+    for (; t < count; ++t)
+      distance_kernel::each_group<1, A>(f, t, g, g_norms, group, out, out_stride, ranges, origin);
+    return;
+  }
+  for (; t + 3 <= count; t += 3)
+    distance_kernel::each_descriptor<3, A>(f, t, g, g_norms, out, out_stride, ranges, origin);
+  for (; t < count; ++t)
+    distance_kernel::each_descriptor<1, A>(f, t, g, g_norms, out, out_stride, ranges, origin);
+}
+
+/// `distances_each_simd` on the compile-time architecture, or (float, with tacmap::precompiled)
+/// on the CPU's best level.
 template <class T>
 void distances_each(const descriptor_tiles<T>& f,
                     const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g, const T* g_norms,
                     T* out, Eigen::Index out_stride, const position_range* ranges = nullptr,
                     tile_range tiles = {}, Eigen::Index group = 1) {
-  constexpr Eigen::Index width = descriptor_tiles<T>::width;
-  const Eigen::Index all = (f.positions() + width - 1) / width;
-  const Eigen::Index count = tiles.end < 0 ? all : std::min(tiles.end, all);
-  const Eigen::Index origin = tiles.begin * width;
-  Eigen::Index t = tiles.begin;
-  if (group > 1) {
-    TACMAP_ASSERT(g.cols() % group == 0, "distances_each: descriptors not a multiple of group");
-    for (; t + 3 <= count; t += 3)
-      distance_kernel::each_group<3>(f, t, g, g_norms, group, out, out_stride, ranges, origin);
-    for (; t < count; ++t)
-      distance_kernel::each_group<1>(f, t, g, g_norms, group, out, out_stride, ranges, origin);
+#if defined(TACMAP_PRECOMPILED) && TACMAP_PRECOMPILED
+  if constexpr (std::is_same_v<T, float>) {
+    active_kernels().distances_each(f, g, g_norms, out, out_stride, ranges, tiles, group);
     return;
   }
-  for (; t + 3 <= count; t += 3)
-    distance_kernel::each_descriptor<3>(f, t, g, g_norms, out, out_stride, ranges, origin);
-  for (; t < count; ++t)
-    distance_kernel::each_descriptor<1>(f, t, g, g_norms, out, out_stride, ranges, origin);
+#endif
+  distances_each_simd<kernel_arch<T>>(f, g, g_norms, out, out_stride, ranges, tiles, group);
 }
 
 }  // namespace tacmap::detail
