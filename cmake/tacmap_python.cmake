@@ -42,17 +42,25 @@ endif()
 
 find_package(Python3 COMPONENTS Interpreter Development.Module NumPy)
 if(NOT Python3_FOUND)
+  # Each missing part with the Debian package that provides it.
   set(tacmap_python_missing "")
-  foreach(component IN ITEMS Interpreter Development.Module NumPy)
+  set(tacmap_python_missing_packages "")
+  foreach(component_package IN ITEMS "Interpreter=python3" "Development.Module=python3-dev"
+                                     "NumPy=python3-numpy")
+    string(REPLACE "=" ";" component_package "${component_package}")
+    list(GET component_package 0 component)
+    list(GET component_package 1 package)
     if(NOT Python3_${component}_FOUND)
-      list(APPEND tacmap_python_missing "${component}")
+      list(APPEND tacmap_python_missing "${component} (Debian: ${package})")
+      list(APPEND tacmap_python_missing_packages "${package}")
     endif()
   endforeach()
   list(JOIN tacmap_python_missing ", " tacmap_python_missing)
+  list(JOIN tacmap_python_missing_packages " " tacmap_python_missing_packages)
   message(FATAL_ERROR
     "tacmap: TACMAP_BUILD_PYTHON is ON but Python 3 for ${Python3_EXECUTABLE} lacks: "
     "${tacmap_python_missing} (Development.Module: the C headers; NumPy: numpy and its "
-    "headers). Install the Debian packages ${tacmap_python_packages}, or pass "
+    "headers). Install the Debian packages ${tacmap_python_missing_packages}, or pass "
     "-DPython3_EXECUTABLE=... for another interpreter, or set TACMAP_BUILD_PYTHON=OFF.")
 endif()
 
@@ -60,7 +68,7 @@ find_package(pybind11 2.6 CONFIG)
 if(NOT pybind11_FOUND)
   message(FATAL_ERROR
     "tacmap: TACMAP_BUILD_PYTHON is ON but pybind11 (>= 2.6, CMake config) was not found. "
-    "Install the Debian packages ${tacmap_python_packages}, or point pybind11_DIR at "
+    "Install the Debian package pybind11-dev (scripts/deps.sh lists it), or point pybind11_DIR at "
     "pybind11's CMake folder, or set TACMAP_BUILD_PYTHON=OFF.")
 endif()
 message(STATUS "tacmap: Python module for ${Python3_EXECUTABLE} (Python ${Python3_VERSION}, "

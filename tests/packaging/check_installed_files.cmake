@@ -1,0 +1,72 @@
+# cmake -DPREFIX=<install prefix> -DBINDIR=<rel> -DDATADIR=<rel> -DDOCDIR=<rel> -DTOOLS=<names>
+#       -DPKG_CONFIG=<pkg-config> -DCXX=<compiler> -DVERSION=<tacmap version>
+#       -DCONSUMER=<a .cpp using tacmap> -DWORK_DIR=<scratch> -P check_installed_files.cmake
+#
+# After `cmake --install`: the tools, the docs (with the session format and its readers), the
+# evaluation plot script, the data, the Find module, and a pkg-config file with which a consumer
+# compiles without CMake.
+set(expected
+  "${DOCDIR}/README.md" "${DOCDIR}/LICENSE" "${DOCDIR}/SESSION_FORMAT.md"
+  "${DATADIR}/tacmap/plot_evaluation.py" "${DATADIR}/tacmap/data/gecko/protocol.txt"
+  "${DATADIR}/pkgconfig/tacmap.pc"
+  "${DATADIR}/cmake/tacmap/tacmapConfig.cmake" "${DATADIR}/cmake/tacmap/FindOpenHaptics.cmake"
+  "${DATADIR}/cmake/tacmap/tacmap_phantom_omni.cmake"
+  "include/tacmap/tacmap.hpp" "include/tacmap/devices/phantom_omni_hdapi.hpp")
+foreach(tool IN LISTS TOOLS)
+  list(APPEND expected "${BINDIR}/${tool}")
+endforeach()
+set(missing "")
+foreach(file IN LISTS expected)
+  if(NOT EXISTS "${PREFIX}/${file}")
+    list(APPEND missing "${file}")
+  endif()
+endforeach()
+if(missing)
+  list(JOIN missing "\n  " missing)
+  message(FATAL_ERROR "not installed under ${PREFIX}:\n  ${missing}")
+endif()
+
+# The installed tools run from the install tree.
+foreach(tool IN LISTS TOOLS)
+  execute_process(COMMAND "${PREFIX}/${BINDIR}/${tool}" --help
+                  RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE out)
+  if(NOT status EQUAL 0)
+    message(FATAL_ERROR "installed ${tool} --help failed (${status}):\n${out}")
+  endif()
+endforeach()
+
+# pkg-config, relocated: the prefix is not the one configured.
+if(NOT PKG_CONFIG)
+  message(FATAL_ERROR "pkg-config not found; install the Debian package pkgconf "
+                      "(scripts/deps.sh lists it)")
+endif()
+set(pc_env "PKG_CONFIG_PATH=${PREFIX}/${DATADIR}/pkgconfig")
+execute_process(COMMAND "${CMAKE_COMMAND}" -E env "${pc_env}" "${PKG_CONFIG}" --modversion tacmap
+                RESULT_VARIABLE status OUTPUT_VARIABLE pc_version ERROR_VARIABLE err
+                OUTPUT_STRIP_TRAILING_WHITESPACE)
+if(NOT status EQUAL 0 OR NOT pc_version STREQUAL VERSION)
+  message(FATAL_ERROR "pkg-config --modversion tacmap: '${pc_version}' (expected ${VERSION})\n${err}")
+endif()
+execute_process(COMMAND "${CMAKE_COMMAND}" -E env "${pc_env}" "${PKG_CONFIG}" --cflags tacmap
+                RESULT_VARIABLE status OUTPUT_VARIABLE cflags ERROR_VARIABLE err
+                OUTPUT_STRIP_TRAILING_WHITESPACE)
+if(NOT status EQUAL 0)
+  message(FATAL_ERROR "pkg-config --cflags tacmap failed:\n${err}")
+endif()
+if(NOT cflags MATCHES "-I[^ ]*/include( |$)")
+  message(FATAL_ERROR "pkg-config --cflags tacmap: '${cflags}' has no include folder")
+endif()
+separate_arguments(cflags_list UNIX_COMMAND "${cflags}")
+file(MAKE_DIRECTORY "${WORK_DIR}")
+execute_process(COMMAND "${CXX}" -std=c++20 ${cflags_list} "${CONSUMER}"
+                        -o "${WORK_DIR}/pkg_config_consumer"
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE out)
+if(NOT status EQUAL 0)
+  message(FATAL_ERROR "compiling with `pkg-config --cflags tacmap` (${cflags}) failed:\n${out}")
+endif()
+execute_process(COMMAND "${WORK_DIR}/pkg_config_consumer" RESULT_VARIABLE status
+                OUTPUT_VARIABLE out ERROR_VARIABLE out)
+if(NOT status EQUAL 0)
+  message(FATAL_ERROR "the pkg-config consumer failed:\n${out}")
+endif()
+message(STATUS "installed: ${TOOLS}, docs, data, Find module; pkg-config tacmap ${pc_version}: ${cflags}")
