@@ -6,14 +6,19 @@
 Several CSVs (e.g. one per --seed) are pooled. Writes, per map in the CSVs:
   <map>_error_vs_touch.png      median error per touch with the 25-75 % band, one line per
                                 configuration (Fig. 6)
-  <map>_final_error_hist.png    histogram of the final (last-touch) errors per configuration (Fig. 7)
-  <map>_touches_to_localize.png histogram of touches to localize over the localized sequences (Fig. 8)
+  <map>_final_error_hist.png    histogram of the final (last-touch) errors, one panel per
+                                configuration: 1 mm bins from 0 to 20 mm, larger errors counted
+                                in the last bin ("> 20") (Fig. 7)
+  <map>_touches_to_localize.png histogram of touches to localize over the localized sequences, one
+                                panel per configuration (Fig. 8)
 and, over all maps, when the CSVs have the belief's claims (tacmap-evaluate since "Confidence"):
   reliability.png               reliability diagram per configuration: the belief's claimed
                                 P(error <= 5 mm) against how often the error was <= 5 mm, in 10
                                 bins, with the expected calibration error (ECE) in the legend;
                                 beside it the same for the heading (pose grids: P(heading error
                                 <= 15 degrees)) and the appearance hypothesis, where present
+Each configuration keeps one colour, marker and line style in every figure: the styles are
+fixed once from the sorted names of all configurations in the CSVs (config_styles).
 Needs python3-matplotlib (Debian; hence /usr/bin/python3, the interpreter it is installed for).
 """
 import argparse
@@ -28,6 +33,35 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+
+# 20 colours: tab10's ten hues, then the lighter shade of each (tab20's odd entries), so that
+# neighbours in the sorted list of names (e.g. ncc beside classic_sift) get different hues.
+_TAB20 = matplotlib.colormaps["tab20"].colors
+PALETTE = [_TAB20[2 * i] for i in range(10)] + [_TAB20[2 * i + 1] for i in range(10)]
+# A marker cycle of another length (7) than the palette (20): two configurations share colour
+# and marker only 140 names apart.
+MARKERS = ["o", "s", "^", "D", "v", "P", "X"]
+
+
+def family_linestyle(config):
+    """Line style by descriptor family, a second cue beside the colour."""
+    if config.startswith("sift_lite"):
+        return "-"
+    if config.startswith("classic"):
+        return "--"
+    if config.startswith("ncc"):
+        return ":"
+    return "-."
+
+
+def config_styles(names):
+    """One style per configuration: {name: {"color", "marker", "linestyle"}}, from the sorted
+    set of `names` (all configurations of all maps), so a configuration looks the same in every
+    figure of a run."""
+    return {name: {"color": PALETTE[i % len(PALETTE)], "marker": MARKERS[i % len(MARKERS)],
+                   "linestyle": family_linestyle(name)}
+            for i, name in enumerate(sorted(set(names)))}
 
 
 def quantile(values, q):
@@ -82,7 +116,7 @@ def reliability(claims, bins=10):
     return points, ece
 
 
-def plot_reliability(runs, out):
+def plot_reliability(runs, out, styles):
     """Reliability diagrams over every map, one line per configuration; None without claims."""
     kinds = {"position": "P(error <= 5 mm)", "heading": "P(heading error <= 15 deg)",
              "appearance": "P(appearance hypothesis)"}
@@ -108,16 +142,14 @@ def plot_reliability(runs, out):
                              said_dark == (r.get("raised_dark") == "1")))
     panels = [k for k in kinds if claims[k]]
     fig, axes = plt.subplots(1, len(panels), figsize=(6.5 * len(panels), 6.5), squeeze=False)
-    colours = plt.get_cmap("tab20")
     configs = sorted(claims["position"])
     for ax, kind in zip(axes[0], panels):
         ax.plot([0, 1], [0, 1], color="k", linewidth=1, linestyle="--", label="calibrated")
-        for i, config in enumerate(configs):
+        for config in configs:
             if not claims[kind].get(config):
                 continue
             points, ece = reliability(claims[kind][config])
-            ax.plot([p[0] for p in points], [p[1] for p in points], marker="o",
-                    color=colours(i % 20),
+            ax.plot([p[0] for p in points], [p[1] for p in points], **styles[config],
                     label=f"{config}: ECE {100 * ece:.1f} pts ({len(claims[kind][config])})")
         ax.set_xlim(0, 1)
         ax.set_ylim(0, 1)
@@ -134,16 +166,28 @@ def plot_reliability(runs, out):
     return path
 
 
-def plot_map(name, configs, out, label=None):
-    """`label`: the map's name in titles (default `name`); files are named after `name`."""
+def small_multiples(count):
+    """A figure with one panel per configuration (`count`), up to 4 per row, shared axes."""
+    cols = min(4, count)
+    rows = math.ceil(count / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols, 2.6 * rows + 0.8), sharex=True,
+                             sharey=True, squeeze=False)
+    flat = [ax for row in axes for ax in row]
+    for ax in flat[count:]:
+        ax.set_visible(False)
+    return fig, flat[:count]
+
+
+def plot_map(name, configs, out, styles, label=None):
+    """`label`: the map's name in titles (default `name`); files are named after `name`;
+    `styles`: config_styles over every configuration of the run."""
     written = []
     title = label or name
     # Fig. 6: error vs touch.
     fig, ax = plt.subplots(figsize=(12, 6))
-    colours = plt.get_cmap("tab20")
     # Quartile bands only when few lines: with many configurations they hide each other.
     bands = len(configs) <= 4
-    for i, (config, seqs) in enumerate(sorted(configs.items())):
+    for config, seqs in sorted(configs.items()):
         n_touch = max(len(rows) for rows in seqs.values())
         xs, med, q1, q3 = [], [], [], []
         for t in range(n_touch):
@@ -152,14 +196,12 @@ def plot_map(name, configs, out, label=None):
             med.append(statistics.median(errs))
             q1.append(quantile(errs, 0.25))
             q3.append(quantile(errs, 0.75))
-        style = "-" if config.startswith("sift_lite") else ("--" if config.startswith("classic") else ":")
-        (line,) = ax.plot(xs, med, marker="o", linestyle=style, linewidth=2,
-                          color=colours(i % 20), label=config)
+        ax.plot(xs, med, linewidth=2, label=config, **styles[config])
         if bands:
-            ax.fill_between(xs, q1, q3, color=line.get_color(), alpha=0.15)
+            ax.fill_between(xs, q1, q3, color=styles[config]["color"], alpha=0.15)
     ax.axhline(5.0, color="k", linestyle="--", linewidth=1, label="5 mm (localized)")
     ax.set_xlabel("touch")
-    ax.set_ylabel("error of the estimate (mm)")
+    ax.set_ylabel("error of the estimate (mm; linear to 5, log above)")
     ax.set_title(f"{title}: error per touch (median" + (", 25-75 % band)" if bands else ")"))
     ax.set_yscale("symlog", linthresh=5.0)
     ax.set_ylim(bottom=0.0)
@@ -171,42 +213,55 @@ def plot_map(name, configs, out, label=None):
     plt.close(fig)
     written.append(path)
 
-    # Fig. 7: final errors.
-    fig, ax = plt.subplots(figsize=(12, 6))
-    finals = {c: [float(rows[-1]["error_mm"]) for rows in seqs.values()]
-              for c, seqs in sorted(configs.items())}
-    top = max(max(v) for v in finals.values())
-    bins = [0, 1, 2, 3, 4, 5, 10, 20, 40, max(80.0, top + 1)]
-    ax.hist(list(finals.values()), bins=bins, label=list(finals.keys()))
-    ax.set_xscale("symlog", linthresh=5.0)
-    ax.axvline(5.0, color="k", linestyle="--", linewidth=1)
-    ax.set_xlabel("final error (mm)")
-    ax.set_ylabel("sequences")
-    ax.set_title(f"{title}: final error per sequence")
-    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    # Fig. 7: final errors, one panel per configuration. Linear 1 mm bins (each bar visible)
+    # up to a stated clip: errors above it are counted in the last bin.
+    clip = 20.0
+    bins = [float(b) for b in range(0, int(clip) + 2)]  # [0, 1), ..., [20, 21): "> 20"
+    fig, axes = small_multiples(len(configs))
+    for ax, (config, seqs) in zip(axes, sorted(configs.items())):
+        finals = [float(rows[-1]["error_mm"]) for rows in seqs.values()]
+        ok = sum(1 for e in finals if e < 5.0)
+        ax.hist([min(e, clip + 0.5) for e in finals], bins=bins, color=styles[config]["color"],
+                edgecolor="black", linewidth=0.5)
+        ax.axvline(5.0, color="k", linestyle="--", linewidth=1)
+        ax.set_title(f"{config}\n{ok} of {len(finals)} below 5 mm", fontsize=8)
+        ax.set_xticks([0, 5, 10, 15, clip + 0.5])
+        ax.set_xticklabels(["0", "5", "10", "15", f"> {clip:.0f}"])
+        ax.grid(True, axis="y", alpha=0.3)
+    for ax in axes:
+        if ax.get_subplotspec().is_last_row() or ax is axes[-1]:
+            ax.set_xlabel("final error (mm)")
+        if ax.get_subplotspec().is_first_col():
+            ax.set_ylabel("sequences")
+    fig.suptitle(f"{title}: final error per sequence (1 mm bins; errors above {clip:.0f} mm "
+                 f"in the last bin; dashed: 5 mm)")
     path = os.path.join(out, f"{name}_final_error_hist.png")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
     written.append(path)
 
-    # Fig. 8: touches to localize.
-    fig, ax = plt.subplots(figsize=(12, 6))
-    ttl = {}
-    for c, seqs in sorted(configs.items()):
-        ttl[c] = [int(rows[0]["touches_to_localize"]) for rows in seqs.values()
-                  if rows[0]["localized"] == "1"]
+    # Fig. 8: touches to localize, one panel per configuration.
     n_touch = max(len(rows) for seqs in configs.values() for rows in seqs.values())
-    ax.hist([v for v in ttl.values()], bins=[t + 0.5 for t in range(n_touch + 1)],
-            label=[f"{c} ({len(v)} localized)" for c, v in ttl.items()])
-    ax.set_xlabel("touches to localize (error < 5 mm from then on)")
-    ax.set_ylabel("sequences")
-    ax.set_title(f"{title}: touches to localize (localized sequences)")
-    ax.set_xticks(range(1, n_touch + 1))
-    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    fig, axes = small_multiples(len(configs))
+    for ax, (config, seqs) in zip(axes, sorted(configs.items())):
+        ttl = [int(rows[0]["touches_to_localize"]) for rows in seqs.values()
+               if rows[0]["localized"] == "1"]
+        ax.hist(ttl, bins=[t + 0.5 for t in range(n_touch + 1)], color=styles[config]["color"],
+                edgecolor="black", linewidth=0.5)
+        ax.set_title(f"{config}\n{len(ttl)} of {len(seqs)} localized", fontsize=8)
+        ax.set_xticks(range(1, n_touch + 1))
+        ax.grid(True, axis="y", alpha=0.3)
+    for ax in axes:
+        if ax.get_subplotspec().is_last_row() or ax is axes[-1]:
+            ax.set_xlabel("touches to localize")
+        if ax.get_subplotspec().is_first_col():
+            ax.set_ylabel("sequences")
+    fig.suptitle(f"{title}: touches to localize (error < 5 mm from then on; localized "
+                 "sequences only)")
     path = os.path.join(out, f"{name}_touches_to_localize.png")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
     written.append(path)
     return written
@@ -226,18 +281,20 @@ def main():
     if not runs:
         sys.exit(f"plot_evaluation: {args.csv} have no data rows")
     os.makedirs(args.out, exist_ok=True)
-    for name, configs in sorted(runs.items()):
-        if args.config:
-            configs = {c: v for c, v in configs.items() if any(f in c for f in args.config)}
-            if not configs:
-                sys.exit(f"plot_evaluation: no configuration matches {args.config}")
-        label = f"{name} ({', '.join(sorted(scenarios[name]))} scenario)" if scenarios[name] else name
-        for path in plot_map(name, configs, args.out, label):
-            print(os.path.abspath(path))
     if args.config:
         runs = {m: {c: v for c, v in configs.items() if any(f in c for f in args.config)}
                 for m, configs in runs.items()}
-    path = plot_reliability(runs, args.out)
+        if not any(runs.values()):
+            sys.exit(f"plot_evaluation: no configuration matches {args.config}")
+    # One style per configuration for every figure, fixed once from all names.
+    styles = config_styles(c for configs in runs.values() for c in configs)
+    for name, configs in sorted(runs.items()):
+        if not configs:
+            continue
+        label = f"{name} ({', '.join(sorted(scenarios[name]))} scenario)" if scenarios[name] else name
+        for path in plot_map(name, configs, args.out, styles, label):
+            print(os.path.abspath(path))
+    path = plot_reliability(runs, args.out, styles)
     if path:
         print(os.path.abspath(path))
 
