@@ -33,6 +33,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 
 
 # 20 colours: tab10's ten hues, then the lighter shade of each (tab20's odd entries), so that
@@ -141,7 +142,9 @@ def plot_reliability(runs, out, styles):
                             (p_dark if said_dark else 1.0 - p_dark,
                              said_dark == (r.get("raised_dark") == "1")))
     panels = [k for k in kinds if claims[k]]
-    fig, axes = plt.subplots(1, len(panels), figsize=(6.5 * len(panels), 6.5), squeeze=False)
+    # Legends under the panels, out of the data's way (one line per configuration).
+    fig, axes = plt.subplots(1, len(panels), squeeze=False,
+                             figsize=(6.5 * len(panels), 6.5 + 0.16 * len(claims["position"])))
     configs = sorted(claims["position"])
     for ax, kind in zip(axes[0], panels):
         ax.plot([0, 1], [0, 1], color="k", linewidth=1, linestyle="--", label="calibrated")
@@ -158,10 +161,10 @@ def plot_reliability(runs, out, styles):
         ax.set_ylabel("observed frequency")
         ax.set_title(f"reliability: {kind}")
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left")
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.1))
     path = os.path.join(out, "reliability.png")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=120, bbox_inches="tight")  # "tight": the legends below the panels
     plt.close(fig)
     return path
 
@@ -176,6 +179,20 @@ def small_multiples(count):
     for ax in flat[count:]:
         ax.set_visible(False)
     return fig, flat[:count]
+
+
+def label_small_multiples(fig, axes, xlabel, title):
+    """Axis labels on the outer panels (x ticks under the lowest panel of every column, also
+    above an empty slot), the title above all."""
+    cols = axes[0].get_subplotspec().get_gridspec().ncols
+    for i, ax in enumerate(axes):
+        if i + cols >= len(axes):  # the lowest panel of its column
+            ax.xaxis.set_tick_params(labelbottom=True)
+            ax.set_xlabel(xlabel)
+        if i % cols == 0:
+            ax.set_ylabel("sequences")
+    fig.suptitle(title)
+    fig.tight_layout(rect=(0, 0, 1, 0.97))
 
 
 def plot_map(name, configs, out, styles, label=None):
@@ -205,6 +222,10 @@ def plot_map(name, configs, out, styles, label=None):
     ax.set_title(f"{title}: error per touch (median" + (", 25-75 % band)" if bands else ")"))
     ax.set_yscale("symlog", linthresh=5.0)
     ax.set_ylim(bottom=0.0)
+    top = ax.get_ylim()[1]
+    ax.set_yticks([t for t in (0, 1, 2, 3, 4, 5, 10, 20, 50, 100, 200) if t <= top])
+    ax.yaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+    ax.yaxis.set_minor_locator(matplotlib.ticker.NullLocator())
     ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     ax.grid(True, alpha=0.3)
     path = os.path.join(out, f"{name}_error_vs_touch.png")
@@ -228,15 +249,10 @@ def plot_map(name, configs, out, styles, label=None):
         ax.set_xticks([0, 5, 10, 15, clip + 0.5])
         ax.set_xticklabels(["0", "5", "10", "15", f"> {clip:.0f}"])
         ax.grid(True, axis="y", alpha=0.3)
-    for ax in axes:
-        if ax.get_subplotspec().is_last_row() or ax is axes[-1]:
-            ax.set_xlabel("final error (mm)")
-        if ax.get_subplotspec().is_first_col():
-            ax.set_ylabel("sequences")
-    fig.suptitle(f"{title}: final error per sequence (1 mm bins; errors above {clip:.0f} mm "
-                 f"in the last bin; dashed: 5 mm)")
+    label_small_multiples(fig, axes, "final error (mm)",
+                          f"{title}: final error per sequence (1 mm bins; errors above "
+                          f"{clip:.0f} mm in the last bin; dashed: 5 mm)")
     path = os.path.join(out, f"{name}_final_error_hist.png")
-    fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
     written.append(path)
@@ -252,15 +268,10 @@ def plot_map(name, configs, out, styles, label=None):
         ax.set_title(f"{config}\n{len(ttl)} of {len(seqs)} localized", fontsize=8)
         ax.set_xticks(range(1, n_touch + 1))
         ax.grid(True, axis="y", alpha=0.3)
-    for ax in axes:
-        if ax.get_subplotspec().is_last_row() or ax is axes[-1]:
-            ax.set_xlabel("touches to localize")
-        if ax.get_subplotspec().is_first_col():
-            ax.set_ylabel("sequences")
-    fig.suptitle(f"{title}: touches to localize (error < 5 mm from then on; localized "
-                 "sequences only)")
+    label_small_multiples(fig, axes, "touches to localize",
+                          f"{title}: touches to localize (error < 5 mm from then on; localized "
+                          "sequences only)")
     path = os.path.join(out, f"{name}_touches_to_localize.png")
-    fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
     written.append(path)
