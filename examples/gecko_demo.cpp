@@ -45,7 +45,10 @@
 
 // stb's quad font for the figure's text (ASCII, from libstb-dev like image_file.hpp's stb):
 // all its functions are static, and its warnings are stb's.
-#if defined(__GNUC__)
+#if defined(__clang__)
+#pragma clang diagnostic push
+#pragma clang diagnostic ignored "-Weverything"
+#elif defined(__GNUC__)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wconversion"
 #pragma GCC diagnostic ignored "-Wsign-conversion"
@@ -59,7 +62,9 @@
 #else
 #include <stb_easy_font.h>
 #endif
-#if defined(__GNUC__)
+#if defined(__clang__)
+#pragma clang diagnostic pop
+#elif defined(__GNUC__)
 #pragma GCC diagnostic pop
 #endif
 
@@ -75,7 +80,7 @@ using index_t = Eigen::Index;
 struct colour {
   float r, g, b;
 };
-constexpr colour black{0.0F, 0.0F, 0.0F}, white{1.0F, 1.0F, 1.0F}, grey{0.35F, 0.35F, 0.35F};
+constexpr colour black{0.0F, 0.0F, 0.0F}, grey{0.35F, 0.35F, 0.35F};
 // Truth and estimate: green and cyan, apart from each other and from the belief's colour map
 // (inferno: black, purple, red, orange, yellow); their shapes differ too (solid box and ring
 // for the truth, dashed box and cross for the estimate), for readers who do not tell them apart.
