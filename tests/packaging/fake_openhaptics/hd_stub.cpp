@@ -11,9 +11,7 @@ HDErrorInfo hdGetError(void) { return HDErrorInfo{HD_SUCCESS, 0, 0}; }
 HDstring hdGetErrorString(HDerror) { return "fake OpenHaptics"; }
 void hdStartScheduler(void) {}
 void hdStopScheduler(void) {}
-void hdScheduleSynchronous(HDSchedulerCallback callback, void* data, HDushort) {
-  callback(data);
-}
+void hdScheduleSynchronous(HDSchedulerCallback callback, void* data, HDushort) { callback(data); }
 void hdBeginFrame(HHD) {}
 void hdEndFrame(HHD) {}
 void hdGetDoublev(HDenum param, HDdouble* values) {
