@@ -2,6 +2,7 @@
 // translation unit per instruction set, each compiled with that set's flags.
 #pragma once
 
+#include "tacmap/detail/weighted_sum.hpp"
 #include "tacmap/filter/detail/posterior_kernel.hpp"
 #include "tacmap/measurement/detail/distance_kernel.hpp"
 #include "tacmap/simd.hpp"
@@ -16,7 +17,8 @@ constexpr precompiled_kernels make_kernels(simd_level level) {
           &accumulate_sign_pair_simd<A, float>,
           &distances_each_simd<A, float>,
           &scan_log_likelihood_simd<A, float>,
-          &weight_by_likelihood_simd<A, float>};
+          &weight_by_likelihood_simd<A, float>,
+          &weighted_sum_simd<A, float>};
 }
 
 /// The AVX2 + FMA table (src/simd_avx2.cpp, compiled with -mavx2 -mfma).

@@ -83,6 +83,9 @@ struct precompiled_kernels {
   log_likelihood_scan<float> (*scan_log_likelihood)(const float* ll, Eigen::Index n);
   weight_sums (*weight_by_likelihood)(const float* prior, const float* ll, float top, float* out,
                                       Eigen::Index n);
+  /// Dense SIFT's filters and the motion models' stencils (Eigen, vectorised for the level).
+  void (*weighted_sum)(const float* const* sources, const float* weights, std::size_t taps,
+                       float* out, Eigen::Index n);
 };
 
 // Defined in tacmap::precompiled (src/simd_dispatch.cpp); declared for every translation unit,

@@ -180,6 +180,31 @@ TEST_CASE("each level's posterior kernels equal their scalar references") {
   }
 }
 
+TEST_CASE("each level's weighted_sum equals the plain sum of its taps") {
+  std::mt19937 rng(10);
+  for (const precompiled_kernels* k : levels_here()) {
+    CAPTURE(tacmap::detail::simd_level_name(k->level));
+    for (const Eigen::Index n : {1, 7, 8, 9, 31, 32, 33, 100, 257}) {
+      CAPTURE(n);
+      const matrix src = random_matrix(n, 5, rng);
+      const float* sources[5];
+      float weights[5];
+      for (Eigen::Index t = 0; t < 5; ++t) {
+        sources[t] = src.col(t).data();
+        weights[t] = static_cast<float>(t + 1) / 7.0F;
+      }
+      std::vector<float> out(static_cast<std::size_t>(n)), want(out.size());
+      k->weighted_sum(sources, weights, 5, out.data(), n);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        float acc = 0.0F;
+        for (std::size_t t = 0; t < 5; ++t) acc += weights[t] * sources[t][i];
+        want[static_cast<std::size_t>(i)] = acc;
+      }
+      check_close(out.data(), want.data(), n);
+    }
+  }
+}
+
 namespace {
 
 // SIFT-lite measured through distance() (no euclidean_distance hook): the models never reach

@@ -4,6 +4,9 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <type_traits>
+
+#include "tacmap/simd.hpp"
 
 namespace tacmap::detail {
 
@@ -11,9 +14,13 @@ namespace tacmap::detail {
 /// descriptor's filters and of the separable motion model. Blocks of 128 bytes (4 AVX registers)
 /// stay in registers across all taps, so each output is stored once instead of once per tap
 /// (about 1.6x faster than tap-by-tap row updates). `out` must not overlap any source.
-template <class T>
-void weighted_sum(const T* const* sources, const T* weights, std::size_t taps, T* out,
-                  Eigen::Index n) {
+///
+/// Eigen vectorises it for the translation unit's flags; A names that instruction set (an xsimd
+/// architecture) only so that each level's copy in tacmap::precompiled is a symbol of its own.
+/// `weighted_sum` chooses it.
+template <class A, class T>
+void weighted_sum_simd(const T* const* sources, const T* weights, std::size_t taps, T* out,
+                       Eigen::Index n) {
   constexpr Eigen::Index block = 128 / static_cast<Eigen::Index>(sizeof(T));
   using chunk = Eigen::Array<T, block, 1>;
   Eigen::Index i = 0;
@@ -52,6 +59,20 @@ void weighted_sum(const T* const* sources, const T* weights, std::size_t taps, T
     for (std::size_t t = 0; t < taps; ++t) acc += weights[t] * sources[t][i];
     out[i] = acc;
   }
+}
+
+/// `weighted_sum_simd` for the compile-time flags, or (float, with tacmap::precompiled) compiled
+/// for the CPU's best level.
+template <class T>
+void weighted_sum(const T* const* sources, const T* weights, std::size_t taps, T* out,
+                  Eigen::Index n) {
+#if defined(TACMAP_PRECOMPILED) && TACMAP_PRECOMPILED
+  if constexpr (std::is_same_v<T, float>) {
+    active_kernels().weighted_sum(sources, weights, taps, out, n);
+    return;
+  }
+#endif
+  weighted_sum_simd<kernel_arch<T>>(sources, weights, taps, out, n);
 }
 
 }  // namespace tacmap::detail
