@@ -124,23 +124,20 @@ void pose_touch_latent(benchmark::State& state) {
 BENCHMARK(pose_touch_latent)->Unit(benchmark::kMillisecond);
 
 // The localizer's pose filter (make_pose_filter: 36 headings, both appearances, the motion
-// floor) without robust_motion's wide component, with it blurring each heading's layer, and
-// with it pooled over the headings: the ratios to the first are the wide component's cost.
-void pose_touch_default_filter(benchmark::State& state, double wide, tacmap::wide_layers layers) {
+// floor) without robust_motion's wide component and with it (the default, one blur per heading
+// layer): their ratio is the wide component's cost per pose touch.
+void pose_touch_default_filter(benchmark::State& state, double wide) {
   const auto map = bench_map();
   tacmap::localizer_config c;
   c.headings = 36;
   c.wide_probability = wide;
-  c.wide_headings = layers;
   auto filter = tacmap::make_pose_filter(c, map, 3.4 / 3.0, {.width = 18, .height = 42});
   time_touches(state, filter, map, {.du_mm = 4.5, .dv_mm = 0.0, .dtheta_rad = 0.0},
                {.du_mm = -4.5, .dv_mm = 0.0, .dtheta_rad = 0.0});
 }
-BENCHMARK_CAPTURE(pose_touch_default_filter, no_wide, 0.0, tacmap::wide_layers::each)
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(pose_touch_default_filter, wide_each_heading, 0.1, tacmap::wide_layers::each)
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(pose_touch_default_filter, wide_pooled, 0.1, tacmap::wide_layers::pooled)
+BENCHMARK_CAPTURE(pose_touch_default_filter, no_wide, 0.0)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(pose_touch_default_filter, wide_default,
+                  tacmap::localizer_config::default_wide_probability)
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

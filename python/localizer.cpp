@@ -235,8 +235,7 @@ void bind_config(py::module_& m) {
       .def_readwrite("wide_probability", &localizer_config::wide_probability,
                      "The probability that a move is off by more than motion_sigma_mm (a wider "
                      "Gaussian of wide_sigma_mm). None: the C++ default "
-                     "(LocalizerConfig.default_wide_probability where the heading is known); 0: "
-                     "none.")
+                     "(LocalizerConfig.default_wide_probability); 0: none.")
       .def_readwrite("wide_sigma_mm", &localizer_config::wide_sigma_mm,
                      "The wide motion component's spread, mm.")
       .def_readonly_static("default_appearance_switch",

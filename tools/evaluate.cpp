@@ -300,18 +300,11 @@ int main(int argc, char** argv) try {
   double wide_sigma = tacmap::localizer_config{}.wide_sigma_mm;
   app.add_option("--wide-probability", wide_probabilities,
                  "probability that a move is off by more than --motion-sigma: a wide component "
-                 "of --wide-sigma (robust_motion; comma-separated to compare; default 0.1 for "
-                 "known headings, 0 for pose grids)")
+                 "of --wide-sigma (robust_motion; comma-separated to compare; default 0.1)")
       ->delimiter(',')
       ->check(CLI::Range(0.0, 0.999));
   app.add_option("--wide-sigma", wide_sigma, "the wide component's spread, mm per axis (3)")
       ->check(CLI::Range(0.01, 100.0));
-  std::vector<std::string> wide_headings;
-  app.add_option("--wide-headings", wide_headings,
-                 "pose grids: the wide component blurs each heading's layer (each) or their sum "
-                 "once (pooled) (comma-separated to compare; default: each)")
-      ->delimiter(',')
-      ->check(CLI::IsMember({"each", "pooled"}));
   app.add_option("--touches", photo_touches,
                  "touches per sequence of the photographs' protocols (7; the gecko's are fixed)")
       ->check(CLI::Range(1, 200));
@@ -480,10 +473,10 @@ int main(int argc, char** argv) try {
   }
 
   // One copy of every configuration per --lost-probability and per --wide-probability value.
-  const auto expand = [&](const auto& values, auto assign) {
+  const auto expand = [&](const std::vector<double>& values, auto assign) {
     if (values.empty()) return;
     std::vector<tacmap::localization_config> expanded;
-    for (const auto& v : values)
+    for (const double v : values)
       for (auto c : configs) {
         assign(c, v);
         expanded.push_back(c);
@@ -495,9 +488,6 @@ int main(int argc, char** argv) try {
   for (auto& c : configs) c.wide_sigma_mm = wide_sigma;
   expand(wide_probabilities,
          [](tacmap::localization_config& c, double v) { c.wide_probability = v; });
-  expand(wide_headings, [](tacmap::localization_config& c, const std::string& v) {
-    c.wide_headings = v == "pooled" ? tacmap::wide_layers::pooled : tacmap::wide_layers::each;
-  });
 
   // One copy of every configuration per --headings value (NCC only with known orientation).
   {

@@ -156,16 +156,18 @@ TEST_CASE("robust_motion: the wide blur equals a direct 2-D convolution with thr
           doctest::Approx(want[static_cast<std::size_t>(i)] / total).epsilon(1e-5));
 }
 
-TEST_CASE("robust_motion: pooled layers blur each hypothesis's heading sum once, spread evenly") {
+TEST_CASE("robust_motion: on a latent pose grid the wide component blurs every heading's layer") {
   // 2 hypotheses x 3 headings x (9 x 12) positions at 1 mm per px; no motion noise to speak of.
+  // Each layer is blurred on its own (an outlier moves the sensor, not its heading or the
+  // object's appearance), so hypotheses and headings keep their masses.
   using grid_type = tacmap::latent_grid<tacmap::pose_grid<float>>;
   const grid_type grid(
       tacmap::pose_grid<float>(
           tacmap::planar_grid<float>({.width = 14, .height = 12}, 1.0, {.width = 3, .height = 4}),
           3),
       {"a", "b"});
-  const Eigen::Index plane = grid.rows() * grid.cols(), layers = 3;
-  REQUIRE(grid.size() == 2 * layers * plane);
+  const Eigen::Index plane = grid.rows() * grid.cols(), layers = 2 * 3;
+  REQUIRE(grid.size() == layers * plane);
   tacmap::belief_array<grid_type> in(grid.size());
   for (Eigen::Index i = 0; i < in.size(); ++i)
     in(i) = 0.5F + static_cast<float>((i * 53) % 17) + (i < plane ? 40.0F : 0.0F);
@@ -180,37 +182,29 @@ TEST_CASE("robust_motion: pooled layers blur each hypothesis's heading sum once,
     }
   };
   const double w = 0.25;
-  const tacmap::robust_motion<identity> pooled(
-      {}, {.wide_probability = w, .wide_sigma_mm = 2.0, .layers = tacmap::wide_layers::pooled});
+  const tacmap::robust_motion<identity> wide({}, {.wide_probability = w, .wide_sigma_mm = 2.0});
   tacmap::belief_array<grid_type> got(grid.size());
-  pooled.predict(grid, in, got, {});
-  // Reference: per hypothesis, the layers' sum blurred (r = 2), a third of it added to each.
+  wide.predict(grid, in, got, {});
+  // Reference: every layer blurred on its own (r = 2), then the whole normalised.
   std::vector<double> want(static_cast<std::size_t>(in.size()));
   double total = 0.0;
-  for (Eigen::Index h = 0; h < 2; ++h) {
-    std::vector<double> sum(static_cast<std::size_t>(plane), 0.0);
-    for (Eigen::Index l = 0; l < layers; ++l)
-      for (Eigen::Index i = 0; i < plane; ++i)
-        sum[static_cast<std::size_t>(i)] += static_cast<double>(in((h * layers + l) * plane + i));
-    const std::vector<double> blurred = three_box_blur(sum, grid.rows(), grid.cols(), 2);
-    for (Eigen::Index l = 0; l < layers; ++l)
-      for (Eigen::Index i = 0; i < plane; ++i) {
-        const Eigen::Index at = (h * layers + l) * plane + i;
-        want[static_cast<std::size_t>(at)] =
-            (1 - w) * static_cast<double>(in(at)) +
-            w / static_cast<double>(layers) * blurred[static_cast<std::size_t>(i)];
-        total += want[static_cast<std::size_t>(at)];
-      }
+  for (Eigen::Index l = 0; l < layers; ++l) {
+    std::vector<double> layer(static_cast<std::size_t>(plane));
+    for (Eigen::Index i = 0; i < plane; ++i)
+      layer[static_cast<std::size_t>(i)] = static_cast<double>(in(l * plane + i));
+    const std::vector<double> blurred = three_box_blur(layer, grid.rows(), grid.cols(), 2);
+    for (Eigen::Index i = 0; i < plane; ++i) {
+      const auto at = static_cast<std::size_t>(l * plane + i);
+      want[at] =
+          (1 - w) * layer[static_cast<std::size_t>(i)] + w * blurred[static_cast<std::size_t>(i)];
+      total += want[at];
+    }
   }
   for (Eigen::Index i = 0; i < in.size(); ++i)
     CHECK(static_cast<double>(got(i)) ==
           doctest::Approx(want[static_cast<std::size_t>(i)] / total).epsilon(1e-5));
-  // The hypotheses keep their masses (pooling never mixes them), and the default (each layer
-  // on its own) differs from pooling on this belief, whose layers differ.
-  CHECK(static_cast<double>(got.head(layers * plane).sum()) ==
-        doctest::Approx(static_cast<double>(in.head(layers * plane).sum())).epsilon(1e-3));
-  const tacmap::robust_motion<identity> each({}, {.wide_probability = w, .wide_sigma_mm = 2.0});
-  tacmap::belief_array<grid_type> per_layer(grid.size());
-  each.predict(grid, in, per_layer, {});
-  CHECK((per_layer - got).abs().maxCoeff() > 1e-4F);
+  // The first layer (hypothesis a, heading 0) holds most of the mass and keeps it, up to what
+  // the blur carried off the plane's edges.
+  CHECK(static_cast<double>(got.head(plane).sum()) ==
+        doctest::Approx(static_cast<double>(in.head(plane).sum())).epsilon(0.05));
 }

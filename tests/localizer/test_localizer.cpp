@@ -159,6 +159,20 @@ TEST_CASE("with unknown heading only motion relative to the sensor counts: any a
                        doctest::Contains("sensor's frame"), std::invalid_argument);
 }
 
+TEST_CASE("the paper's configuration is the paper's motion model, in the plane and with headings") {
+  for (const int headings : {0, 36}) {
+    auto paper = tacmap::localizer_config::paper();
+    paper.headings = headings;
+    CHECK(paper.lost() == 0.0);
+    CHECK(paper.wide() == 0.0);
+    // The defaults protect both grids alike (the wide component per heading layer on poses).
+    tacmap::localizer_config defaults;
+    defaults.headings = headings;
+    CHECK(defaults.lost() == tacmap::localizer_config::default_lost_probability);
+    CHECK(defaults.wide() == tacmap::localizer_config::default_wide_probability);
+  }
+}
+
 TEST_CASE("a move off the map restarts the paper's configuration instead of failing") {
   const auto& p = gecko();
   auto config = tacmap::localizer_config::paper();

@@ -24,25 +24,10 @@
 
 #include "tacmap/config.hpp"
 #include "tacmap/grid/concept.hpp"
-#include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/motion/concept.hpp"
 
 namespace tacmap {
-
-/// How `robust_motion`'s wide component treats a grid's layers (a pose grid's headings).
-enum class wide_layers {
-  /// Every layer blurred on its own: an outlier moves the sensor, not its heading. One blur per
-  /// layer (36 per hypothesis at 36 headings).
-  each,
-  /// The layers of each hypothesis summed, blurred once and spread evenly over them: an outlier
-  /// may also have turned the sensor. One blur per hypothesis, whatever the number of headings.
-  pooled,
-};
-
-[[nodiscard]] inline const char* to_string(wide_layers l) {
-  return l == wide_layers::each ? "each" : "pooled";
-}
 
 /// Configuration of `robust_motion`.
 struct robust_motion_params {
@@ -54,8 +39,6 @@ struct robust_motion_params {
   /// outliers, noise larger than configured). 0: none.
   double wide_probability = 0.0;
   double wide_sigma_mm = 4.0;  ///< the wide component's spread, mm per axis
-  /// Grids of several layers (pose grids: one per heading): blur each layer, or their sum.
-  wide_layers layers = wide_layers::each;
 
   void validate() const {
     if (!(std::isfinite(lost_probability) && lost_probability >= 0.0 && lost_probability < 1.0))
@@ -108,8 +91,7 @@ class robust_motion {
       // box passes per axis (variance r (r + 1) px^2 for radius r) over every rows x cols
       // plane; mass blurred off a plane's edge is dropped and the rest renormalised, as the
       // base model does with mass moved off the grid. Sliding sums in double, whole rows at a
-      // time (vectorised); the plane is transposed once so both axes run that way. With
-      // wide_layers::pooled, each hypothesis's layers share one blur of their sum.
+      // time (vectorised); the plane is transposed once so both axes run that way.
       const Eigen::Index rows = grid.rows(), cols = grid.cols(), plane = rows * cols;
       const double pitch_x = cols > 1 ? std::abs(grid.state_mm(1)(0) - grid.state_mm(0)(0)) : 1.0;
       const double pitch_y =
@@ -117,32 +99,13 @@ class robust_motion {
       const Eigen::Index rx = box_radius(params_.wide_sigma_mm / pitch_x);
       const Eigen::Index ry = box_radius(params_.wide_sigma_mm / pitch_y);
       const auto keep = static_cast<scalar>(1.0 - w);
-      // The states of one hypothesis (a latent grid's block; the whole grid otherwise): pooled
-      // layers never mix hypotheses, whose weights the motion keeps apart (latent_motion).
-      Eigen::Index block = grid.size();
-      if constexpr (latent_state_grid<G>) block = grid.hypothesis_size();
-      const Eigen::Index layers = block / plane;
-      if (params_.layers == wide_layers::pooled && layers > 1) {
-        for (Eigen::Index at = 0; at < out.size(); at += block) {
-          down_ =
-              Eigen::Map<const image<scalar>>(out.data() + at, rows, cols).template cast<double>();
-          for (Eigen::Index l = 1; l < layers; ++l)
-            down_ += Eigen::Map<const image<scalar>>(out.data() + at + l * plane, rows, cols)
-                         .template cast<double>();
-          blur(rx, ry);
-          pooled_ = across_.transpose() * (w / static_cast<double>(layers));
-          for (Eigen::Index l = 0; l < layers; ++l) {
-            Eigen::Map<image<scalar>> img(out.data() + at + l * plane, rows, cols);
-            img = img * keep + pooled_.template cast<scalar>();
-          }
-        }
-      } else {
-        for (Eigen::Index at = 0; at < out.size(); at += plane) {
-          Eigen::Map<image<scalar>> img(out.data() + at, rows, cols);
-          down_ = img.template cast<double>();
-          blur(rx, ry);
-          img = img * keep + (across_.transpose() * w).template cast<scalar>();
-        }
+      for (Eigen::Index at = 0; at < out.size(); at += plane) {
+        Eigen::Map<image<scalar>> img(out.data() + at, rows, cols);
+        down_ = img.template cast<double>();
+        box3_down(down_, scratch_, ry);  // along y
+        across_ = down_.transpose();
+        box3_down(across_, scratch_, rx);  // along x
+        img = img * keep + (across_.transpose() * w).template cast<scalar>();
       }
       out /= out.sum();
     }
@@ -157,13 +120,6 @@ class robust_motion {
   [[nodiscard]] const robust_motion_params& params() const { return params_; }
 
  private:
-  // down_ blurred along y then x, left transposed in across_.
-  void blur(Eigen::Index rx, Eigen::Index ry) const {
-    box3_down(down_, scratch_, ry);  // along y
-    across_ = down_.transpose();
-    box3_down(across_, scratch_, rx);  // along x
-  }
-
   // Radius r of the box whose three passes have variance r (r + 1) closest to sigma^2 (px).
   static Eigen::Index box_radius(double sigma_px) {
     return std::max<Eigen::Index>(
@@ -214,7 +170,6 @@ class robust_motion {
   // Scratch of the wide component (reused between predictions): a plane, its transpose, and
   // the passes' other buffer.
   mutable image<double> down_, across_, scratch_;
-  mutable image<double> pooled_;  // pooled layers: the blurred share each layer receives
 };
 
 }  // namespace tacmap
