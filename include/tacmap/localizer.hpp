@@ -162,7 +162,7 @@ struct localizer_config {
   /// claims' ECE 4.3-6.3 points (3.5-5.8) and recall at touch 6 90-95 % (92-96 %). 0.2 of 5 mm
   /// gains more under faults and loses more calibration without. Pose grids (36 headings,
   /// random heading, 216 sequences): 144 -> 152 localized with outliers, 120 -> 133 with 3x
-  /// noise, 168 -> 172 without faults; the blur runs per heading layer, about 0.15 of a touch.
+  /// noise, 168 -> 172 without faults; the blur runs per heading layer, 1.16x a pose touch.
   static constexpr double default_wide_probability = 0.1;
   double wide_sigma_mm = 3.0;
   [[nodiscard]] double wide() const { return wide_probability.value_or(default_wide_probability); }
