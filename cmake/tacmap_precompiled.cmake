@@ -32,6 +32,7 @@ if(TACMAP_BUILD_PRECOMPILED)
   # linker keeps).
   add_library(tacmap_precompiled STATIC
     src/simd_dispatch.cpp
+    src/instantiations.cpp
     src/simd_avx2.cpp)
   add_library(tacmap::precompiled ALIAS tacmap_precompiled)
   set_target_properties(tacmap_precompiled PROPERTIES

@@ -5,7 +5,8 @@
 // architecture, i.e. whatever the consumer's flags enable (SSE2 with a compiler's default x86-64
 // flags, AVX2 + FMA with -march=x86-64-v3). Linking tacmap::precompiled defines
 // TACMAP_PRECOMPILED=1 for the consumer: the float kernels of the measurement and the update
-// (descriptor distances, the posterior's scan and weighting) then go through entry points
+// (descriptor distances, the posterior's scan and weighting) and the separable filters of dense
+// SIFT and the motion models (detail::weighted_sum) then go through entry points
 // compiled once per instruction set in that library and chosen once, at the first call, from
 // what the CPU offers — so a consumer built with default flags still gets AVX2 + FMA where the
 // CPU has it. `simd_info()` tells which is in use.

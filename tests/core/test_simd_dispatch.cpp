@@ -12,9 +12,11 @@
 #include <vector>
 
 #include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/filter/detail/posterior_kernel.hpp"
 #include "tacmap/measurement/descriptor_likelihood.hpp"
 #include "tacmap/measurement/detail/distance_kernel.hpp"
+#include "tacmap/motion/odometry_gaussian.hpp"
 #include "tacmap/simd.hpp"
 
 static_assert(TACMAP_PRECOMPILED, "this test links tacmap::precompiled");
@@ -239,4 +241,24 @@ TEST_CASE("models through the dispatched kernels equal the same models through d
       slow.distances(grid, z, b);
       check_close(a.data(), b.data(), grid.size());
     }
+}
+
+TEST_CASE("a precompiled SIFT-lite planar filter (extern template) localizes a touch of its map") {
+  // bayes_filter<planar_grid<float>, odometry_gaussian, descriptor_likelihood<sift_lite>> is
+  // declared extern here (TACMAP_PRECOMPILED): this links tacmap::precompiled's copy.
+  std::mt19937 rng(12);
+  tacmap::image<float> map(70, 50);
+  for (float& v : map.reshaped()) v = static_cast<float>(rng() % 1000) / 1000.0F;
+  const tacmap::planar_grid<float> grid({.width = 50, .height = 70}, 1.0,
+                                        {.width = 18, .height = 42});
+  tacmap::bayes_filter filter(
+      grid, tacmap::odometry_gaussian{},
+      tacmap::descriptor_likelihood<tacmap::sift_lite>({}, map, grid.window_size()));
+  filter.update(map.block(9, 21, 42, 18));
+  filter.predict({.dx_mm = 2.0, .dy_mm = 0.0});
+  filter.update(map.block(9, 23, 42, 18));
+  const auto e = filter.estimate();
+  CHECK(filter.belief().sum() == doctest::Approx(1.0).epsilon(1e-4));
+  CHECK(grid.cell(e.map_index).row == 9);
+  CHECK(grid.cell(e.map_index).col == 23);
 }

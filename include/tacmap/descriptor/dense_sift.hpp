@@ -543,3 +543,12 @@ static_assert(descriptor<classic_sift>);
 static_assert(descriptor<dense_sift<2, 8, double>>);
 
 }  // namespace tacmap
+
+// Compiled once in tacmap::precompiled where it is linked (tacmap/precompiled.hpp).
+#include "tacmap/precompiled.hpp"
+#ifdef TACMAP_EXTERN_TEMPLATE
+namespace tacmap {
+TACMAP_EXTERN_TEMPLATE class dense_sift<2, 8, float>;
+TACMAP_EXTERN_TEMPLATE class dense_sift<4, 8, float>;
+}  // namespace tacmap
+#endif

@@ -103,25 +103,7 @@ class bayes_filter {
   using estimate_type = state_estimate<Grid::dimension>;
 
   /// A filter with a uniform initial belief.
-  bayes_filter(Grid grid, Motion motion, Measurement measurement)
-      : grid_(std::move(grid)),
-        motion_(std::move(motion)),
-        measurement_(std::move(measurement)),
-        belief_(grid_.size()),
-        scratch_(grid_.size()),
-        log_likelihood_(grid_.size()),
-        origin_mm_(grid_.state_mm(0)),
-        offsets_mm_(Grid::dimension, position_count(grid_)) {
-    TACMAP_ASSERT(grid_.size() > 0 && grid_.size() % (grid_.rows() * grid_.cols()) == 0,
-                  "a state_grid's size must be a positive multiple of rows * cols");
-    // State coordinates are fixed for the filter's life: cache them (relative to the first
-    // state, which keeps them small) so estimate() is two matrix products, not N grid calls.
-    // A latent grid repeats its positions in every hypothesis block: the first block's suffice.
-    for (Eigen::Index i = 0; i < offsets_mm_.cols(); ++i)
-      offsets_mm_.col(i) = grid_.state_mm(i) - origin_mm_;
-    if constexpr (Grid::dimension >= 2) lattice_step_ = lattice_step();
-    reset();
-  }
+  bayes_filter(Grid grid, Motion motion, Measurement measurement);
 
   /// Back to the uniform belief (no knowledge of where the sensor is).
   void reset() { belief_.setConstant(scalar_type(1) / static_cast<scalar_type>(grid_.size())); }
@@ -157,31 +139,10 @@ class bayes_filter {
 
   /// Control update with odometry `u`. If the motion model throws (invalid odometry, all mass
   /// off the grid) the exception propagates and the belief is unchanged.
-  prediction_report predict(const control_type& u) {
-    const prediction_report report = motion_.predict(grid_, belief_, scratch_, u);
-    // A user's motion model that breaks its contract must not poison the belief.
-    const double total = static_cast<double>(scratch_.sum());
-    if (!(std::isfinite(total) && total > 0.0) || scratch_.minCoeff() < 0)
-      detail::fail<std::logic_error>(
-          "bayes_filter::predict: the motion model returned a belief summing to ", total,
-          " (or with negative values); expected finite probabilities >= 0 with a positive sum. "
-          "The belief is unchanged; check the motion model");
-    normalise(scratch_, total);
-    belief_.swap(scratch_);
-    return report;
-  }
+  prediction_report predict(const control_type& u);
 
   /// Measurement update with measurement `z`, through the measurement model.
-  update_report update(const measurement_type& z) {
-    measurement_.log_likelihood(grid_, z, log_likelihood_);
-    if (log_likelihood_.size() != grid_.size()) {
-      const Eigen::Index got = log_likelihood_.size();
-      log_likelihood_.resize(grid_.size());
-      detail::fail("bayes_filter::update: the measurement model resized its output to ", got,
-                   " values; expected ", grid_.size(), " (one per state). The belief is unchanged");
-    }
-    return apply_log_likelihood(log_likelihood_, "the measurement model");
-  }
+  update_report update(const measurement_type& z);
 
   /// Measurement update with a log-likelihood computed elsewhere: a flat array of `size()`
   /// values, or an image of `rows() x cols()` for single-layer grids.
@@ -222,46 +183,7 @@ class bayes_filter {
   /// MAP state, mean, covariance and entropy of the belief, in the map frame (mm); over a
   /// latent grid, of the position marginal, with each hypothesis's posterior (see
   /// `state_estimate`).
-  [[nodiscard]] estimate_type estimate() const {
-    estimate_type e;
-    // The belief over positions: the belief itself, or summed over the hypotheses.
-    const belief_type* positions = &belief_;
-    belief_type marginal;
-    if constexpr (latent_state_grid<Grid>) {
-      marginal = marginal_belief(grid_, belief_);
-      positions = &marginal;
-      e.hypothesis_probability = hypothesis_posterior(grid_, belief_);
-      for (std::size_t h = 1; h < e.hypothesis_probability.size(); ++h)
-        if (e.hypothesis_probability[h] >
-            e.hypothesis_probability[static_cast<std::size_t>(e.map_hypothesis)])
-          e.map_hypothesis = static_cast<Eigen::Index>(h);
-    }
-    const belief_type& p = *positions;
-    Eigen::Index best = 0;
-    e.map_probability = static_cast<double>(p.maxCoeff(&best));
-    e.map_index = best + e.map_hypothesis * p.size();
-    e.map_mm = grid_.state_mm(e.map_index);
-    // Moments of the cached coordinates relative to the grid's first state: small numbers, so
-    // E[o o^T] - E[o] E[o]^T does not cancel catastrophically even on a far-from-origin map.
-    if constexpr (has_circular_coordinates<Grid>) {
-      circular_moments(p, e);
-    } else {
-      typename estimate_type::vector_type mean_offset = estimate_type::vector_type::Zero();
-      typename estimate_type::matrix_type second = estimate_type::matrix_type::Zero();
-      for (Eigen::Index i = 0; i < p.size(); ++i) {
-        const double w = static_cast<double>(p(i));
-        const auto o = offsets_mm_.col(i);
-        mean_offset += w * o;
-        second.noalias() += (w * o) * o.transpose();
-      }
-      e.covariance_mm2 = second - mean_offset * mean_offset.transpose();
-      e.mean_mm = origin_mm_ + mean_offset;
-    }
-    // 0 log 0 = 0: the tiny offset keeps log finite where p = 0 without changing other terms.
-    const scalar_type tiny = std::numeric_limits<scalar_type>::min();
-    e.entropy_nats = -static_cast<double>((p * (p + tiny).log()).sum());
-    return e;
-  }
+  [[nodiscard]] estimate_type estimate() const;
 
   /// The belief's probability that the sensor's position (x, y) lies within `radius_mm` of
   /// `center_mm` (map frame, mm), whatever its heading or latent hypothesis: the mass of the
@@ -568,4 +490,103 @@ class bayes_filter {
       Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
 };
 
+// The heavy members, defined out of the class: not inline, so that where tacmap::precompiled
+// declares an instantiation `extern template` (tacmap/precompiled.hpp) the compiler does not
+// instantiate them again for inlining. (Not being inline, an instantiation on a type local to a
+// translation unit that leaves one unused would be reported by -Wunused-function.)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-function"
+
+template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
+bayes_filter<Grid, Motion, Measurement>::bayes_filter(Grid grid, Motion motion,
+                                                      Measurement measurement)
+    : grid_(std::move(grid)),
+      motion_(std::move(motion)),
+      measurement_(std::move(measurement)),
+      belief_(grid_.size()),
+      scratch_(grid_.size()),
+      log_likelihood_(grid_.size()),
+      origin_mm_(grid_.state_mm(0)),
+      offsets_mm_(Grid::dimension, position_count(grid_)) {
+  TACMAP_ASSERT(grid_.size() > 0 && grid_.size() % (grid_.rows() * grid_.cols()) == 0,
+                "a state_grid's size must be a positive multiple of rows * cols");
+  // State coordinates are fixed for the filter's life: cache them (relative to the first
+  // state, which keeps them small) so estimate() is two matrix products, not N grid calls.
+  // A latent grid repeats its positions in every hypothesis block: the first block's suffice.
+  for (Eigen::Index i = 0; i < offsets_mm_.cols(); ++i)
+    offsets_mm_.col(i) = grid_.state_mm(i) - origin_mm_;
+  if constexpr (Grid::dimension >= 2) lattice_step_ = lattice_step();
+  reset();
+}
+
+template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
+prediction_report bayes_filter<Grid, Motion, Measurement>::predict(const control_type& u) {
+  const prediction_report report = motion_.predict(grid_, belief_, scratch_, u);
+  // A user's motion model that breaks its contract must not poison the belief.
+  const double total = static_cast<double>(scratch_.sum());
+  if (!(std::isfinite(total) && total > 0.0) || scratch_.minCoeff() < 0)
+    detail::fail<std::logic_error>(
+        "bayes_filter::predict: the motion model returned a belief summing to ", total,
+        " (or with negative values); expected finite probabilities >= 0 with a positive sum. "
+        "The belief is unchanged; check the motion model");
+  normalise(scratch_, total);
+  belief_.swap(scratch_);
+  return report;
+}
+
+template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
+update_report bayes_filter<Grid, Motion, Measurement>::update(const measurement_type& z) {
+  measurement_.log_likelihood(grid_, z, log_likelihood_);
+  if (log_likelihood_.size() != grid_.size()) {
+    const Eigen::Index got = log_likelihood_.size();
+    log_likelihood_.resize(grid_.size());
+    detail::fail("bayes_filter::update: the measurement model resized its output to ", got,
+                 " values; expected ", grid_.size(), " (one per state). The belief is unchanged");
+  }
+  return apply_log_likelihood(log_likelihood_, "the measurement model");
+}
+
+template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
+auto bayes_filter<Grid, Motion, Measurement>::estimate() const -> estimate_type {
+  estimate_type e;
+  // The belief over positions: the belief itself, or summed over the hypotheses.
+  const belief_type* positions = &belief_;
+  belief_type marginal;
+  if constexpr (latent_state_grid<Grid>) {
+    marginal = marginal_belief(grid_, belief_);
+    positions = &marginal;
+    e.hypothesis_probability = hypothesis_posterior(grid_, belief_);
+    for (std::size_t h = 1; h < e.hypothesis_probability.size(); ++h)
+      if (e.hypothesis_probability[h] >
+          e.hypothesis_probability[static_cast<std::size_t>(e.map_hypothesis)])
+        e.map_hypothesis = static_cast<Eigen::Index>(h);
+  }
+  const belief_type& p = *positions;
+  Eigen::Index best = 0;
+  e.map_probability = static_cast<double>(p.maxCoeff(&best));
+  e.map_index = best + e.map_hypothesis * p.size();
+  e.map_mm = grid_.state_mm(e.map_index);
+  // Moments of the cached coordinates relative to the grid's first state: small numbers, so
+  // E[o o^T] - E[o] E[o]^T does not cancel catastrophically even on a far-from-origin map.
+  if constexpr (has_circular_coordinates<Grid>) {
+    circular_moments(p, e);
+  } else {
+    typename estimate_type::vector_type mean_offset = estimate_type::vector_type::Zero();
+    typename estimate_type::matrix_type second = estimate_type::matrix_type::Zero();
+    for (Eigen::Index i = 0; i < p.size(); ++i) {
+      const double w = static_cast<double>(p(i));
+      const auto o = offsets_mm_.col(i);
+      mean_offset += w * o;
+      second.noalias() += (w * o) * o.transpose();
+    }
+    e.covariance_mm2 = second - mean_offset * mean_offset.transpose();
+    e.mean_mm = origin_mm_ + mean_offset;
+  }
+  // 0 log 0 = 0: the tiny offset keeps log finite where p = 0 without changing other terms.
+  const scalar_type tiny = std::numeric_limits<scalar_type>::min();
+  e.entropy_nats = -static_cast<double>((p * (p + tiny).log()).sum());
+  return e;
+}
+
+#pragma GCC diagnostic pop
 }  // namespace tacmap

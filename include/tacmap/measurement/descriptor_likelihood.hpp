@@ -203,65 +203,7 @@ class descriptor_likelihood {
   /// pixels (the grid's window). Throws std::invalid_argument when the map is smaller than the
   /// window, or the descriptor's patch and the spacing do not fit the window.
   descriptor_likelihood(Descriptor descriptor, const image<float>& map, pixel_size window,
-                        descriptor_likelihood_params params = {})
-      : descriptor_(std::move(descriptor)), params_(params), window_(window) {
-    params.validate();
-    const Eigen::Index p = descriptor_.patch_size();
-    offsets_ =
-        detail::checked_patch_offsets("descriptor_likelihood", map, window, p, params.spacing);
-    const image<scalar_type> map_t = map.template cast<scalar_type>();
-    field_ = descriptor_.compute(map_t);
-    TACMAP_ASSERT(field_.rows == map.rows() - p + 1 && field_.cols == map.cols() - p + 1,
-                  "descriptor::compute returned a field of the wrong shape");
-    // Windows read field rows [0, rows_ + max offset row) only (the patches' offsets grow down
-    // the window): the kernel skips the rest (6 of 103 rows for the paper's map).
-    Eigen::Index last_offset_row = 0;
-    for (const grid_cell& o : offsets_) last_offset_row = std::max(last_offset_row, o.row);
-    const Eigen::Index used_rows = (map.rows() - window.height + 1) + last_offset_row;
-    if (params.both_signs) {
-      if constexpr (contrast_symmetric_descriptor<Descriptor>) {
-        basis_ = detail::contrast_basis(descriptor_.contrast_permutation());
-        if (basis_.dimension() != descriptor_.dimension())
-          detail::fail("descriptor_likelihood: the descriptor's contrast_permutation() has ",
-                       basis_.dimension(), " elements but its dimension() is ",
-                       descriptor_.dimension(), "; expected one entry per descriptor element");
-      } else {
-        detail::fail(
-            "descriptor_likelihood_params: both_signs = true, but this descriptor has no "
-            "contrast_permutation() (what inverting the contrast does to its values); "
-            "use both_signs = false (appearance_likelihood then scores each sign in its "
-            "own pass)");
-      }
-    }
-    field_tiles_ = detail::descriptor_tiles<scalar_type>(
-        in_stored_basis(field_.values.leftCols(used_rows * field_.cols)));
-    rows_ = map.rows() - window.height + 1;
-    cols_ = map.cols() - window.width + 1;
-    if (params.features == window_features::per_window) {
-      // One extraction per window, as for a tactile image; patch m of window i goes to column i
-      // of per_window_[m].
-      const Eigen::Index m_count = patches_per_window();
-      per_window_.assign(
-          static_cast<std::size_t>(m_count),
-          detail::descriptor_tiles<scalar_type>(rows_ * cols_, field_.values.rows()));
-      image<scalar_type> cut(window.height, window.width);
-      descriptor_matrix column(field_.values.rows(), 1);  // both_signs: one window patch
-      for (Eigen::Index r = 0; r < rows_; ++r)
-        for (Eigen::Index c = 0; c < cols_; ++c) {
-          cut = map_t.block(r, c, window.height, window.width);
-          const auto wf = descriptor_.compute(cut);
-          for (Eigen::Index m = 0; m < m_count; ++m) {
-            const grid_cell o = offsets_[static_cast<std::size_t>(m)];
-            if (params.both_signs) {
-              basis_.apply(wf.at(o.row, o.col), column.col(0));
-              per_window_[static_cast<std::size_t>(m)].set(r * cols_ + c, column.col(0));
-            } else {
-              per_window_[static_cast<std::size_t>(m)].set(r * cols_ + c, wf.at(o.row, o.col));
-            }
-          }
-        }
-    }
-  }
+                        descriptor_likelihood_params params = {});
 
   /// Number of tactile patches M (the paper: 3).
   [[nodiscard]] Eigen::Index patches_per_window() const {
@@ -601,4 +543,92 @@ class descriptor_likelihood {
   detail::contrast_basis basis_;  // both_signs: the basis the map's descriptors are stored in
 };
 
+// The heavy members, defined out of the class: not inline, so that where tacmap::precompiled
+// declares an instantiation `extern template` (tacmap/precompiled.hpp) the compiler does not
+// instantiate them again for inlining. (Not being inline, an instantiation on a type local to a
+// translation unit that leaves one unused would be reported by -Wunused-function.)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-function"
+
+template <descriptor Descriptor>
+descriptor_likelihood<Descriptor>::descriptor_likelihood(Descriptor descriptor,
+                                                         const image<float>& map, pixel_size window,
+                                                         descriptor_likelihood_params params)
+    : descriptor_(std::move(descriptor)), params_(params), window_(window) {
+  params.validate();
+  const Eigen::Index p = descriptor_.patch_size();
+  offsets_ = detail::checked_patch_offsets("descriptor_likelihood", map, window, p, params.spacing);
+  const image<scalar_type> map_t = map.template cast<scalar_type>();
+  field_ = descriptor_.compute(map_t);
+  TACMAP_ASSERT(field_.rows == map.rows() - p + 1 && field_.cols == map.cols() - p + 1,
+                "descriptor::compute returned a field of the wrong shape");
+  // Windows read field rows [0, rows_ + max offset row) only (the patches' offsets grow down
+  // the window): the kernel skips the rest (6 of 103 rows for the paper's map).
+  Eigen::Index last_offset_row = 0;
+  for (const grid_cell& o : offsets_) last_offset_row = std::max(last_offset_row, o.row);
+  const Eigen::Index used_rows = (map.rows() - window.height + 1) + last_offset_row;
+  if (params.both_signs) {
+    if constexpr (contrast_symmetric_descriptor<Descriptor>) {
+      basis_ = detail::contrast_basis(descriptor_.contrast_permutation());
+      if (basis_.dimension() != descriptor_.dimension())
+        detail::fail("descriptor_likelihood: the descriptor's contrast_permutation() has ",
+                     basis_.dimension(), " elements but its dimension() is ",
+                     descriptor_.dimension(), "; expected one entry per descriptor element");
+    } else {
+      detail::fail(
+          "descriptor_likelihood_params: both_signs = true, but this descriptor has no "
+          "contrast_permutation() (what inverting the contrast does to its values); "
+          "use both_signs = false (appearance_likelihood then scores each sign in its "
+          "own pass)");
+    }
+  }
+  field_tiles_ = detail::descriptor_tiles<scalar_type>(
+      in_stored_basis(field_.values.leftCols(used_rows * field_.cols)));
+  rows_ = map.rows() - window.height + 1;
+  cols_ = map.cols() - window.width + 1;
+  if (params.features == window_features::per_window) {
+    // One extraction per window, as for a tactile image; patch m of window i goes to column i
+    // of per_window_[m].
+    const Eigen::Index m_count = patches_per_window();
+    per_window_.assign(static_cast<std::size_t>(m_count),
+                       detail::descriptor_tiles<scalar_type>(rows_ * cols_, field_.values.rows()));
+    image<scalar_type> cut(window.height, window.width);
+    descriptor_matrix column(field_.values.rows(), 1);  // both_signs: one window patch
+    for (Eigen::Index r = 0; r < rows_; ++r)
+      for (Eigen::Index c = 0; c < cols_; ++c) {
+        cut = map_t.block(r, c, window.height, window.width);
+        const auto wf = descriptor_.compute(cut);
+        for (Eigen::Index m = 0; m < m_count; ++m) {
+          const grid_cell o = offsets_[static_cast<std::size_t>(m)];
+          if (params.both_signs) {
+            basis_.apply(wf.at(o.row, o.col), column.col(0));
+            per_window_[static_cast<std::size_t>(m)].set(r * cols_ + c, column.col(0));
+          } else {
+            per_window_[static_cast<std::size_t>(m)].set(r * cols_ + c, wf.at(o.row, o.col));
+          }
+        }
+      }
+  }
+}
+
+#pragma GCC diagnostic pop
 }  // namespace tacmap
+
+// Compiled once in tacmap::precompiled where it is linked (tacmap/precompiled.hpp): the model with
+// SIFT-lite and classic SIFT, and the planar filters of the Gaussian odometry model with them.
+#include "tacmap/precompiled.hpp"
+#ifdef TACMAP_EXTERN_TEMPLATE
+#include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/motion/odometry_gaussian.hpp"
+namespace tacmap {
+TACMAP_EXTERN_TEMPLATE class descriptor_likelihood<sift_lite>;
+TACMAP_EXTERN_TEMPLATE class descriptor_likelihood<classic_sift>;
+TACMAP_EXTERN_TEMPLATE void descriptor_likelihood<sift_lite>::log_likelihood(
+    const planar_grid<float>&, const image<float>&, Eigen::ArrayXf&) const;
+TACMAP_EXTERN_TEMPLATE void descriptor_likelihood<classic_sift>::log_likelihood(
+    const planar_grid<float>&, const image<float>&, Eigen::ArrayXf&) const;
+TACMAP_EXTERN_FILTER(planar_grid<float>, odometry_gaussian, descriptor_likelihood<sift_lite>);
+TACMAP_EXTERN_FILTER(planar_grid<float>, odometry_gaussian, descriptor_likelihood<classic_sift>);
+}  // namespace tacmap
+#endif

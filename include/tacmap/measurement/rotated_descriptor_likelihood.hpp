@@ -537,3 +537,21 @@ class rotated_descriptor_likelihood {
 };
 
 }  // namespace tacmap
+
+// Compiled once in tacmap::precompiled where it is linked (tacmap/precompiled.hpp): the model with
+// SIFT-lite and classic SIFT, and the (x, y, theta) filters of the Gaussian odometry model with
+// them.
+#include "tacmap/precompiled.hpp"
+#ifdef TACMAP_EXTERN_TEMPLATE
+#include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/motion/pose_odometry_gaussian.hpp"
+namespace tacmap {
+TACMAP_EXTERN_TEMPLATE class rotated_descriptor_likelihood<sift_lite>;
+TACMAP_EXTERN_TEMPLATE class rotated_descriptor_likelihood<classic_sift>;
+TACMAP_EXTERN_FILTER(pose_grid<float>, pose_odometry_gaussian,
+                     rotated_descriptor_likelihood<sift_lite>);
+TACMAP_EXTERN_FILTER(pose_grid<float>, pose_odometry_gaussian,
+                     rotated_descriptor_likelihood<classic_sift>);
+}  // namespace tacmap
+#endif
