@@ -785,3 +785,17 @@ class localizer {
 };
 
 }  // namespace tacmap
+
+// Compiled once in tacmap::precompiled where it is linked (tacmap/precompiled.hpp): the
+// localizer's planar and (x, y, theta) filters.
+#include "tacmap/precompiled.hpp"
+#ifdef TACMAP_EXTERN_TEMPLATE
+namespace tacmap {
+TACMAP_EXTERN_FILTER(latent_grid<planar_grid<float>>,
+                     robust_motion<latent_motion<odometry_gaussian>>,
+                     appearance_likelihood<configured_measurement>);
+TACMAP_EXTERN_FILTER(latent_grid<pose_grid<float>>,
+                     robust_motion<latent_motion<pose_odometry_gaussian>>,
+                     appearance_likelihood<configured_rotated_measurement>);
+}  // namespace tacmap
+#endif
