@@ -23,8 +23,14 @@ install(EXPORT tacmap-targets NAMESPACE tacmap:: FILE tacmapTargets.cmake
 configure_package_config_file(cmake/tacmapConfig.cmake.in
   "${CMAKE_CURRENT_BINARY_DIR}/tacmapConfig.cmake"
   INSTALL_DESTINATION "${tacmap_cmake_dir}")
+# Headers only: any architecture may use the package. With tacmap::precompiled (a compiled
+# library) only a consumer of the same pointer size may (CMake's check without ARCH_INDEPENDENT).
+set(tacmap_version_arch ARCH_INDEPENDENT)
+if(TARGET tacmap_precompiled)
+  set(tacmap_version_arch "")
+endif()
 write_basic_package_version_file("${CMAKE_CURRENT_BINARY_DIR}/tacmapConfigVersion.cmake"
-  COMPATIBILITY SameMinorVersion ARCH_INDEPENDENT)
+  COMPATIBILITY SameMinorVersion ${tacmap_version_arch})
 install(FILES "${CMAKE_CURRENT_BINARY_DIR}/tacmapConfig.cmake"
               "${CMAKE_CURRENT_BINARY_DIR}/tacmapConfigVersion.cmake"
               cmake/tacmap_xsimd_compat.cmake
