@@ -42,6 +42,10 @@ if(TACMAP_BUILD_PRECOMPILED)
   target_link_libraries(tacmap_precompiled PUBLIC tacmap)
   target_compile_definitions(tacmap_precompiled PUBLIC TACMAP_PRECOMPILED=1)
   set_source_files_properties(src/simd_avx2.cpp PROPERTIES COMPILE_OPTIONS "-mavx2;-mfma")
+  # Optimised in Debug builds too: it holds the hot kernels and the heavy members of the common
+  # filters (a map's per-window descriptors take about a minute at -O0), and tacmap's own tools,
+  # Python module and examples link it in every build.
+  target_compile_options(tacmap_precompiled PRIVATE $<$<CONFIG:Debug>:-O2>)
   # Our own strict warnings, never exported (tacmap_dev_flags exists in top-level builds).
   target_link_libraries(tacmap_precompiled
     PRIVATE "$<BUILD_INTERFACE:$<$<TARGET_EXISTS:tacmap_dev_flags>:tacmap_dev_flags>>")
