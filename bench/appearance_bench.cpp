@@ -14,24 +14,9 @@
 namespace {
 
 using tacmap_bench::bench_map;
+using tacmap_bench::time_touches;
 using planar = tacmap::planar_grid<float>;
 using pose = tacmap::pose_grid<float>;
-
-// Alternates two touches 4 mm apart so that predict moves the belief and update sees a new image.
-template <class Filter>
-void time_touches(benchmark::State& state, Filter& filter, const tacmap::image<float>& map,
-                  const typename Filter::control_type& there,
-                  const typename Filter::control_type& back) {
-  const tacmap::image<float> a = map.block(30, 40, 42, 18);
-  const tacmap::image<float> b = map.block(30, 44, 42, 18);
-  bool at_a = true;
-  for (auto _ : state) {
-    filter.predict(at_a ? there : back);
-    filter.update(at_a ? b : a);
-    at_a = !at_a;
-    benchmark::DoNotOptimize(filter.belief().data());
-  }
-}
 
 void planar_touch_fixed(benchmark::State& state) {
   const auto map = bench_map();

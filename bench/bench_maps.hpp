@@ -1,6 +1,9 @@
-// A reproducible textured map for the benchmarks: random bars (edges in both directions) over a
-// slanted sine, normalised to [0, 1]. Shared by every bench that needs a map.
+// What the benchmarks share. A reproducible textured map for the benchmarks: random bars (edges in
+// both directions) over a slanted sine, normalised to [0, 1]. Shared by every bench that needs a
+// map.
 #pragma once
+
+#include <benchmark/benchmark.h>
 
 #include <cmath>
 #include <random>
@@ -23,6 +26,23 @@ inline tacmap::image<float> bench_map(Eigen::Index rows = 120, Eigen::Index cols
       map(r, c) += 0.2F * std::sin(0.2F * static_cast<float>(r + 2 * c));
   map -= map.minCoeff();
   return map / map.maxCoeff();
+}
+
+// Times touches (predict then update), alternating two windows 4 px apart so that predict
+// moves the belief and update sees a new image.
+template <class Filter>
+void time_touches(benchmark::State& state, Filter& filter, const tacmap::image<float>& map,
+                  const typename Filter::control_type& there,
+                  const typename Filter::control_type& back) {
+  const tacmap::image<float> a = map.block(30, 40, 42, 18);
+  const tacmap::image<float> b = map.block(30, 44, 42, 18);
+  bool at_a = true;
+  for (auto _ : state) {
+    filter.predict(at_a ? there : back);
+    filter.update(at_a ? b : a);
+    at_a = !at_a;
+    benchmark::DoNotOptimize(filter.belief().data());
+  }
 }
 
 }  // namespace tacmap_bench

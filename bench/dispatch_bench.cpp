@@ -28,21 +28,13 @@ tacmap::planar_localizer_filter default_filter(const tacmap::image<float>& map) 
   return tacmap::make_planar_filter({}, map, 3.4 / 3.0, {.width = 18, .height = 42});
 }
 
-// One touch (predict + update) of the localizer's default filter, alternating two windows 4 px
-// apart, as appearance_bench's planar_touch_default_filter.
+// One touch (predict + update) of the localizer's default filter, as appearance_bench's
+// planar_touch_default_filter.
 void default_touch(benchmark::State& state) {
   const auto map = bench_map();
   auto filter = default_filter(map);
-  const tacmap::image<float> a = map.block(30, 40, 42, 18);
-  const tacmap::image<float> b = map.block(30, 44, 42, 18);
-  const tacmap::odometry there{.dx_mm = 4.5, .dy_mm = 0.0}, back{.dx_mm = -4.5, .dy_mm = 0.0};
-  bool at_a = true;
-  for (auto _ : state) {
-    filter.predict(at_a ? there : back);
-    filter.update(at_a ? b : a);
-    at_a = !at_a;
-    benchmark::DoNotOptimize(filter.belief().data());
-  }
+  tacmap_bench::time_touches(state, filter, map, {.dx_mm = 4.5, .dy_mm = 0.0},
+                             {.dx_mm = -4.5, .dy_mm = 0.0});
   state.SetLabel(simd_label());
 }
 BENCHMARK(default_touch)->Unit(benchmark::kMicrosecond);
