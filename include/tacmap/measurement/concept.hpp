@@ -23,6 +23,11 @@ namespace tacmap {
 ///  5. A measurement the model cannot use (wrong size, NaN) throws `std::invalid_argument`
 ///     naming the value and what was expected.
 ///
+/// Optional hook: a model that also declares `m.log_likelihood(g, z, out, predicted)`, with
+/// `predicted` the filter's belief before this update (`belief_array<G>`), gets that call from
+/// `bayes_filter::update` instead: it may skip states the prediction has ruled out
+/// (`library_likelihood` skips objects whose predicted posterior is negligible).
+///
 /// Minimal conforming type (a measurement that carries no information):
 /// ```
 /// struct uninformative {

@@ -20,14 +20,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <exception>
-#include <stdexcept>
+#include <tuple>
 #include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/motion/concept.hpp"
+#include "tacmap/motion/detail/block_prediction.hpp"
 
 namespace tacmap {
 
@@ -76,52 +76,16 @@ class latent_motion {
     const Eigen::Index n = grid.hypothesis_size();
     auto& block_in = scratch<T>(0);
     auto& block_out = scratch<T>(1);
-    block_in.resize(n);
-    block_out.resize(n);
-    kept_.assign(static_cast<std::size_t>(hypotheses), 0.0);
-    double before = 0.0;
-    double kept = 0.0;
-    std::exception_ptr lost_everything;
-    for (Eigen::Index h = 0; h < hypotheses; ++h) {
-      const double mass = static_cast<double>(in.segment(h * n, n).sum());
-      before += mass;
-      if (!(mass > 0.0)) {
-        out.segment(h * n, n).setZero();
-        continue;
-      }
-      // The base model sees a normalised belief: a block whose hypothesis has become very
-      // unlikely (mass 1e-40, say) would otherwise overflow the base model's own 1 / sum.
-      if (const auto scale = static_cast<T>(1.0 / mass); std::isfinite(scale))
-        block_in = in.segment(h * n, n) * scale;
-      else  // 1 / mass overflows T (a denormal mass): scale in double
-        block_in = (in.segment(h * n, n).template cast<double>() * (1.0 / mass)).template cast<T>();
-      double block_kept = 0.0;
-      try {
-        const prediction_report r = motion_.predict(grid.base(), block_in, block_out, u);
-        block_kept = mass * (1.0 - r.mass_lost);
-      } catch (const std::domain_error&) {
-        // This block's mass all left the grid; other blocks may still hold some.
-        lost_everything = std::current_exception();
-      }
-      if (block_kept > 0.0)
-        out.segment(h * n, n) = block_out;  // normalised; weighted below
-      else
-        out.segment(h * n, n).setZero();
-      kept_[static_cast<std::size_t>(h)] = block_kept;
-      kept += block_kept;
-    }
-    if (!(kept > 0.0)) {
-      if (lost_everything) std::rethrow_exception(lost_everything);
-      detail::fail<std::domain_error>("latent_motion: the motion left no belief mass in any of ",
-                                      hypotheses, " hypotheses");
-    }
-    // Each block back to its kept mass, relative to the largest (in double, so that a belief
-    // that almost entirely left the grid cannot underflow every block to 0 in float).
-    double largest = 0.0;
-    for (Eigen::Index h = 0; h < hypotheses; ++h)
-      largest = std::max(largest, kept_[static_cast<std::size_t>(h)]);
-    for (Eigen::Index h = 0; h < hypotheses; ++h)
-      out.segment(h * n, n) *= static_cast<T>(kept_[static_cast<std::size_t>(h)] / largest);
+    const detail::block_masses m = detail::predict_blocks<T>(
+        hypotheses,
+        [n](Eigen::Index h) {
+          return std::pair{h * n, n};
+        },
+        [&](Eigen::Index) { return std::tie(block_in, block_out); },
+        [&](Eigen::Index, const auto& block, auto& moved) {
+          return motion_.predict(grid.base(), block, moved, u);
+        },
+        in, out, kept_, "latent_motion", "hypotheses");
     if (s > 0.0) {
       // out_h <- (1 - s) out_h + s / (H - 1) (total - out_h), in place: a block-wise affine map.
       auto& total = block_out;
@@ -133,7 +97,7 @@ class latent_motion {
         out.segment(h * n, n) = stay * out.segment(h * n, n) + move * total;
     }
     out *= static_cast<T>(1.0 / static_cast<double>(out.sum()));
-    return {std::clamp(1.0 - kept / before, 0.0, 1.0)};
+    return {std::clamp(1.0 - m.kept / m.before, 0.0, 1.0)};
   }
 
  private:

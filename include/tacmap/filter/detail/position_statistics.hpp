@@ -1,0 +1,308 @@
+// tacmap: the statistics `bayes_filter` reports about a belief over one grid's positions —
+// estimate(), probability_within(), most_probable_disc(), heading_probability_within() — kept
+// apart from the filter so that a belief made of several grids' blocks (a `library_grid`: one
+// block per object, each with its own map) gets the same statistics for one block.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "tacmap/angle.hpp"
+#include "tacmap/config.hpp"
+#include "tacmap/filter/state_estimate.hpp"
+#include "tacmap/grid/concept.hpp"
+#include "tacmap/grid/latent_grid.hpp"
+#include "tacmap/image.hpp"
+
+namespace tacmap::detail {
+
+/// Position statistics of beliefs over a grid `G` (any `state_grid`; over a `latent_grid` the
+/// hypotheses are marginalised out). Caches the states' coordinates (relative to the first
+/// state, which keeps them small) once, so that each statistic is a pass over the belief, not
+/// N grid calls. The belief is passed as a view of `G::size()` values; it need not sum to one
+/// (a block of a larger belief): masses come out in the belief's own units, and `estimate()`
+/// wants a normalised belief. Keeps scratch (`most_probable_disc`): one object per filter.
+template <state_grid G>
+class position_statistics {
+ public:
+  using scalar_type = typename G::scalar_type;
+  using estimate_type = state_estimate<G::dimension>;
+  using view_type = Eigen::Map<const Eigen::Array<scalar_type, Eigen::Dynamic, 1>>;
+
+  explicit position_statistics(const G& grid)
+      : origin_mm_(grid.state_mm(0)), offsets_mm_(G::dimension, position_count(grid)) {
+    TACMAP_ASSERT(grid.size() > 0 && grid.size() % (grid.rows() * grid.cols()) == 0,
+                  "a state_grid's size must be a positive multiple of rows * cols");
+    // A latent grid repeats its positions in every hypothesis block: the first block's suffice.
+    for (Eigen::Index i = 0; i < offsets_mm_.cols(); ++i)
+      offsets_mm_.col(i) = grid.state_mm(i) - origin_mm_;
+    if constexpr (G::dimension >= 2) lattice_step_ = lattice_step(grid);
+  }
+
+  /// True when the grid's positions form an axis-aligned regular lattice (planar_grid,
+  /// pose_grid): what `most_probable_disc` needs.
+  [[nodiscard]] bool positions_form_lattice() const { return lattice_step_.allFinite(); }
+
+  /// `bayes_filter::estimate()` of a normalised belief `b` over `grid`.
+  [[nodiscard]] estimate_type estimate(const G& grid, view_type b) const {
+    estimate_type e;
+    // The belief over positions: the belief itself, or summed over the hypotheses.
+    Eigen::Array<scalar_type, Eigen::Dynamic, 1> marginal;
+    const scalar_type* positions = b.data();
+    const Eigen::Index n = offsets_mm_.cols();
+    if constexpr (latent_state_grid<G>) {
+      marginal = b.head(n);
+      for (Eigen::Index h = 1; h < grid.hypotheses(); ++h) marginal += b.segment(h * n, n);
+      positions = marginal.data();
+      e.hypothesis_probability.resize(static_cast<std::size_t>(grid.hypotheses()));
+      for (Eigen::Index h = 0; h < grid.hypotheses(); ++h)
+        e.hypothesis_probability[static_cast<std::size_t>(h)] =
+            b.segment(h * n, n).template cast<double>().sum();
+      for (std::size_t h = 1; h < e.hypothesis_probability.size(); ++h)
+        if (e.hypothesis_probability[h] >
+            e.hypothesis_probability[static_cast<std::size_t>(e.map_hypothesis)])
+          e.map_hypothesis = static_cast<Eigen::Index>(h);
+    }
+    const view_type p(positions, n);
+    Eigen::Index best = 0;
+    e.map_probability = static_cast<double>(p.maxCoeff(&best));
+    e.map_index = best + e.map_hypothesis * n;
+    e.map_mm = grid.state_mm(e.map_index);
+    // Moments of the cached coordinates relative to the grid's first state: small numbers, so
+    // E[o o^T] - E[o] E[o]^T does not cancel catastrophically even on a far-from-origin map.
+    if constexpr (has_circular_coordinates<G>) {
+      circular_moments(p, e);
+    } else {
+      typename estimate_type::vector_type mean_offset = estimate_type::vector_type::Zero();
+      typename estimate_type::matrix_type second = estimate_type::matrix_type::Zero();
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const double w = static_cast<double>(p(i));
+        const auto o = offsets_mm_.col(i);
+        mean_offset += w * o;
+        second.noalias() += (w * o) * o.transpose();
+      }
+      e.covariance_mm2 = second - mean_offset * mean_offset.transpose();
+      e.mean_mm = origin_mm_ + mean_offset;
+    }
+    // 0 log 0 = 0: the tiny offset keeps log finite where p = 0 without changing other terms.
+    const scalar_type tiny = std::numeric_limits<scalar_type>::min();
+    e.entropy_nats = -static_cast<double>((p * (p + tiny).log()).sum());
+    return e;
+  }
+
+  /// The mass of `b` whose position lies within `radius_mm` of `center_mm` (both validated by
+  /// the caller).
+  [[nodiscard]] double probability_within(view_type b, const Eigen::Vector2d& center_mm,
+                                          double radius_mm) const requires(G::dimension >= 2) {
+    const Eigen::Vector2d c = center_mm - origin_mm_.template head<2>();
+    const double r2 = radius_mm * radius_mm;
+    return masked_mass(b, [&](Eigen::Index i) {
+      return (offsets_mm_.col(i).template head<2>() - c).squaredNorm() <= r2;
+    });
+  }
+
+  /// `bayes_filter::most_probable_disc` of `b` over `grid` (radius validated by the caller;
+  /// throws std::logic_error when the positions are no lattice).
+  [[nodiscard]] std::pair<Eigen::Vector2d, double> most_probable_disc(const G& grid, view_type b,
+                                                                      double radius_mm) const
+      requires(G::dimension >= 2) {
+    const Eigen::Index rows = grid.rows(), cols = grid.cols(), plane = rows * cols;
+    if (!positions_form_lattice())
+      fail<std::logic_error>(
+          "bayes_filter::most_probable_disc: the grid's positions are not an axis-aligned regular "
+          "lattice (as planar_grid's and pose_grid's are); use probability_within instead");
+    // Position marginal (the planes summed), then per-row prefix sums: the disc is a stack of
+    // row runs, each a difference of two prefix sums. The prefix rows are padded by the widest
+    // run on both sides (clamped values), so every run of a row is one shifted vector
+    // difference over the whole row.
+    // Scratch kept between calls: three fresh images per touch cost more (page faults of the
+    // allocations) than the scan itself.
+    image<double>& p = disc_marginal_;
+    p.setZero(rows, cols);
+    Eigen::Map<Eigen::ArrayXd> p_flat(p.data(), plane);
+    for (Eigen::Index at = 0; at < b.size(); at += plane)
+      p_flat += view_type(b.data() + at, plane).template cast<double>();
+    const double sx = std::abs(lattice_step_(0)), sy = std::abs(lattice_step_(1));
+    const auto reach_r = static_cast<Eigen::Index>(std::floor(radius_mm / sy + 1e-9));
+    std::vector<Eigen::Index> half(static_cast<std::size_t>(reach_r + 1));
+    for (Eigen::Index dr = 0; dr <= reach_r; ++dr) {
+      const double dy = static_cast<double>(dr) * sy;
+      half[static_cast<std::size_t>(dr)] = static_cast<Eigen::Index>(
+          std::floor(std::sqrt(std::max(0.0, radius_mm * radius_mm - dy * dy)) / sx + 1e-9));
+    }
+    const Eigen::Index pad = half[0];
+    image<double>& prefix = disc_prefix_;  // prefix(r, pad + j) = sum of p(r, 0..j-1)
+    prefix.resize(rows, cols + 1 + 2 * pad);
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      double run = 0.0;
+      for (Eigen::Index j = 0; j <= pad; ++j) prefix(r, j) = 0.0;
+      for (Eigen::Index c = 0; c < cols; ++c) prefix(r, pad + c + 1) = run += p(r, c);
+      for (Eigen::Index j = pad + cols + 1; j < prefix.cols(); ++j) prefix(r, j) = run;
+    }
+    // Plain loops over contiguous rows (vectorised by the compiler): rows are short (~100), and
+    // an Eigen expression per (row, run) costs more than its arithmetic.
+    image<double>& disc = disc_mass_;
+    disc.setZero(rows, cols);
+    const Eigen::Index stride = prefix.cols();
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      double* out = disc.data() + r * cols;
+      for (Eigen::Index dr = -reach_r; dr <= reach_r; ++dr) {
+        const Eigen::Index rr = r + dr;
+        if (rr < 0 || rr >= rows) continue;
+        const Eigen::Index h = half[static_cast<std::size_t>(dr < 0 ? -dr : dr)];
+        // Row rr's run c - h .. c + h for every c at once.
+        const double* hi = prefix.data() + rr * stride + pad + h + 1;
+        const double* lo = prefix.data() + rr * stride + pad - h;
+        for (Eigen::Index c = 0; c < cols; ++c) out[c] += hi[c] - lo[c];
+      }
+    }
+    Eigen::Index best = 0;
+    for (Eigen::Index i = 1; i < plane; ++i)
+      if (disc.data()[i] > disc.data()[best]) best = i;
+    const Eigen::Index best_r = best / cols, best_c = best % cols;
+    // Discs around a sharp peak all hold (nearly) the same mass, and the scan keeps the first:
+    // the centre is the mean of the belief inside the best disc instead, which sits on the
+    // peak (or the middle of a plateau), and the probability is that of its own disc.
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    double inside = 0.0;
+    for (Eigen::Index dr = -reach_r; dr <= reach_r; ++dr) {
+      const Eigen::Index rr = best_r + dr;
+      if (rr < 0 || rr >= rows) continue;
+      const Eigen::Index h = half[static_cast<std::size_t>(dr < 0 ? -dr : dr)];
+      for (Eigen::Index cc = std::max<Eigen::Index>(0, best_c - h);
+           cc <= std::min(cols - 1, best_c + h); ++cc) {
+        sum += p(rr, cc) * offsets_mm_.col(rr * cols + cc).template head<2>();
+        inside += p(rr, cc);
+      }
+    }
+    const Eigen::Vector2d centre =
+        origin_mm_.template head<2>() +
+        (inside > 0.0
+             ? Eigen::Vector2d(sum / inside)
+             : Eigen::Vector2d(offsets_mm_.col(best_r * cols + best_c).template head<2>()));
+    // Its own disc's mass (what probability_within(centre, radius_mm) gives), from the cells
+    // near the best one only: the centre is a mean of cells within the radius of the best, so
+    // every cell within the radius of the centre is within twice the radius of the best.
+    const Eigen::Vector2d c = centre - origin_mm_.template head<2>();
+    const double r2 = radius_mm * radius_mm;
+    double mass = 0.0;
+    for (Eigen::Index rr = std::max<Eigen::Index>(0, best_r - 2 * reach_r - 2);
+         rr <= std::min(rows - 1, best_r + 2 * reach_r + 2); ++rr)
+      for (Eigen::Index cc = std::max<Eigen::Index>(0, best_c - 2 * pad - 2);
+           cc <= std::min(cols - 1, best_c + 2 * pad + 2); ++cc)
+        if ((offsets_mm_.col(rr * cols + cc).template head<2>() - c).squaredNorm() <= r2)
+          mass += p(rr, cc);
+    return {centre, std::min(mass, 1.0)};
+  }
+
+  /// The mass of `b` whose heading lies within `tolerance_rad` of `heading_rad` (validated by
+  /// the caller).
+  [[nodiscard]] double heading_probability_within(view_type b, double heading_rad,
+                                                  double tolerance_rad) const
+      requires(G::dimension == 3 && has_circular_coordinates<G>) {
+    return masked_mass(b, [&](Eigen::Index i) {
+      return std::abs(wrap_angle(origin_mm_(2) + offsets_mm_(2, i) - heading_rad)) <= tolerance_rad;
+    });
+  }
+
+ private:
+  // Mean and covariance when some coordinates are angles (G::circular[k]): the mean angle is
+  // the circular mean atan2(E[sin], E[cos]) in [-pi, pi), and deviations from it are wrapped
+  // into [-pi, pi) before the (co)variances are taken — a belief split between -179 and +179
+  // degrees has mean 180 degrees and a small spread, not mean 0 and a huge one. Two passes: the
+  // mean first, then the wrapped deviations.
+  void circular_moments(view_type belief,
+                        estimate_type& e) const requires has_circular_coordinates<G> {
+    constexpr int dim = G::dimension;
+    typename estimate_type::vector_type mean_offset = estimate_type::vector_type::Zero();
+    std::array<double, static_cast<std::size_t>(dim)> sum_cos{};
+    std::array<double, static_cast<std::size_t>(dim)> sum_sin{};
+    for (Eigen::Index i = 0; i < belief.size(); ++i) {
+      const double p = static_cast<double>(belief(i));
+      if (p == 0.0) continue;
+      const auto o = offsets_mm_.col(i);
+      for (int k = 0; k < dim; ++k) {
+        if (G::circular[static_cast<std::size_t>(k)]) {
+          const double angle = origin_mm_(k) + o(k);
+          sum_cos[static_cast<std::size_t>(k)] += p * std::cos(angle);
+          sum_sin[static_cast<std::size_t>(k)] += p * std::sin(angle);
+        } else {
+          mean_offset(k) += p * o(k);
+        }
+      }
+    }
+    typename estimate_type::vector_type mean = origin_mm_ + mean_offset;
+    for (int k = 0; k < dim; ++k)
+      if (G::circular[static_cast<std::size_t>(k)])
+        mean(k) = wrap_angle(
+            std::atan2(sum_sin[static_cast<std::size_t>(k)], sum_cos[static_cast<std::size_t>(k)]));
+    e.mean_mm = mean;
+    typename estimate_type::matrix_type cov = estimate_type::matrix_type::Zero();
+    typename estimate_type::vector_type d;
+    for (Eigen::Index i = 0; i < belief.size(); ++i) {
+      const double p = static_cast<double>(belief(i));
+      if (p == 0.0) continue;
+      const auto o = offsets_mm_.col(i);
+      for (int k = 0; k < dim; ++k)
+        d(k) = G::circular[static_cast<std::size_t>(k)] ? wrap_angle(origin_mm_(k) + o(k) - mean(k))
+                                                        : o(k) - mean_offset(k);
+      cov.noalias() += (p * d) * d.transpose();
+    }
+    e.covariance_mm2 = cov;
+  }
+
+  // Mass of the states whose position (the base grid's state for latent grids, in every
+  // hypothesis block) satisfies `inside(position index)`, accumulated in double.
+  template <class Inside>
+  double masked_mass(view_type b, Inside inside) const {
+    const Eigen::Index n = offsets_mm_.cols();
+    double mass = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (!inside(i)) continue;
+      for (Eigen::Index s = i; s < b.size(); s += n) mass += static_cast<double>(b(s));
+    }
+    return std::min(mass, 1.0);
+  }
+
+  // The steps (column, row) of the plane's positions when every position of the first plane is
+  // origin + c * step_x + r * step_y (checked on every state); NaN otherwise.
+  Eigen::Vector2d lattice_step(const G& grid) const requires(G::dimension >= 2) {
+    const Eigen::Index rows = grid.rows(), cols = grid.cols();
+    const double sx = cols > 1 ? offsets_mm_(0, 1) : 1.0;
+    const double sy = rows > 1 ? offsets_mm_(1, cols) : 1.0;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    if (!(std::abs(sx) > 0.0 && std::abs(sy) > 0.0)) return {nan, nan};
+    const double tolerance = 1e-6 * (std::abs(sx) + std::abs(sy));
+    for (Eigen::Index r = 0; r < rows; ++r)
+      for (Eigen::Index c = 0; c < cols; ++c) {
+        const auto o = offsets_mm_.col(r * cols + c);
+        if (std::abs(o(0) - static_cast<double>(c) * sx) > tolerance ||
+            std::abs(o(1) - static_cast<double>(r) * sy) > tolerance)
+          return {nan, nan};
+      }
+    return {sx, sy};
+  }
+
+  // Positions the estimate describes: the base grid's states for latent grids, else all states.
+  static Eigen::Index position_count(const G& grid) {
+    if constexpr (latent_state_grid<G>)
+      return grid.hypothesis_size();
+    else
+      return grid.size();
+  }
+
+  typename estimate_type::vector_type origin_mm_;
+  Eigen::Matrix<double, G::dimension, Eigen::Dynamic> offsets_mm_;
+  // See lattice_step(); NaN: not a lattice (or fewer than two coordinates).
+  Eigen::Vector2d lattice_step_ =
+      Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  // most_probable_disc's scratch: the position marginal, its row prefix sums, the disc masses.
+  mutable image<double> disc_marginal_, disc_prefix_, disc_mass_;
+};
+
+}  // namespace tacmap::detail
