@@ -41,6 +41,7 @@
 #include <string>
 #include <vector>
 
+#include "library_evaluation.hpp"
 #include "photo_maps.hpp"
 #include "tacmap/sim/calibration.hpp"
 #include "tacmap/sim/experiment.hpp"
@@ -204,6 +205,8 @@ int main(int argc, char** argv) try {
   std::string output = "evaluation.csv";
   double min_success = -1.0;
   bool quiet = false;
+  bool library = false;
+  long long library_sequences = -1;  // -1: as many as the maps' sequences together
   // Overrides of the scenario's knobs: empty = the scenario's value.
   struct knob {
     const char* flag;
@@ -336,6 +339,12 @@ int main(int argc, char** argv) try {
   app.add_option(
       "--min-success-rate", min_success,
       "exit 1 when any map x configuration localizes fewer than this fraction of sequences");
+  app.add_flag("--library", library,
+               "which object, and where: every map is one object of one library; each sequence "
+               "touches a random object, localized over the whole library (tables: recognition, "
+               "localization, confusion)");
+  app.add_option("--library-sequences", library_sequences,
+                 "--library: sequences per configuration (default: the maps' sequences together)");
   app.add_flag("--quiet,-q", quiet, "no progress bar (it is drawn only when stderr is a terminal)");
   app.add_option("--scenario", scenario_name,
                  "ideal (the map's own image, a new sensor), realistic (camera map, "
@@ -570,6 +579,41 @@ int main(int argc, char** argv) try {
   if (!csv)
     tacmap::detail::fail<std::runtime_error>("tacmap-evaluate: cannot open '", output,
                                              "' for writing; check the folder exists");
+
+  if (library) {
+    if (maps.size() < 2)
+      throw CLI::ValidationError("--library", "a library needs at least two maps (got " +
+                                                  std::to_string(maps.size()) +
+                                                  "); add --photo files");
+    std::vector<tacmap::library_object> objects;
+    std::size_t all_sequences = 0;
+    for (const auto& m : maps) {
+      objects.push_back({m.name, &m.protocol});
+      const std::size_t n = m.protocol.sequences.size();
+      all_sequences += max_sequences == 0 ? n : std::min(n, max_sequences);
+    }
+    if (library_sequences == 0 || library_sequences < -1)
+      throw CLI::ValidationError(
+          "--library-sequences",
+          std::to_string(library_sequences) + " is not a number of sequences; expected N >= 1");
+    std::fprintf(stderr, "scenario: %s, library of %zu objects\n", to_string(scenario),
+                 objects.size());
+    const bool ok = tacmap_tools::run_library_evaluation(
+        objects, configs,
+        library_sequences > 0 ? static_cast<std::size_t>(library_sequences) : all_sequences,
+        max_sequences, seed, min_success, quiet, csv);
+    csv.close();
+    if (!csv)
+      tacmap::detail::fail<std::runtime_error>("tacmap-evaluate: writing '", output, "' failed");
+    std::fprintf(stderr, "wrote %s\n", std::filesystem::absolute(output).string().c_str());
+    if (!ok) {
+      std::fprintf(stderr, "tacmap-evaluate: a success rate is below --min-success-rate %.2f\n",
+                   min_success);
+      return 1;
+    }
+    return 0;
+  }
+
   csv << "map,config,model,pairing,shape,features,sequence,touch,location,true_x_mm,true_y_mm,"
          "map_x_mm,map_y_mm,error_mm,entropy_nats,accepted,localized,touches_to_localize,scenario,"
          "tau,headings,true_theta_rad,map_theta_rad,raised_dark,p_inverted,p_within_5mm,"

@@ -105,6 +105,10 @@ struct touch_record {
   /// Posterior of each appearance hypothesis after this touch (`localization_config::
   /// appearances()` order; one value 1 for `fixed`).
   std::vector<double> appearance_probability;
+  /// The odometry the filter was told before this touch (map frame, mm; 0 at the first touch):
+  /// the planned move, with the injected faults.
+  double reported_dx_mm = 0.0;
+  double reported_dy_mm = 0.0;
   bool odometry_outlier = false;  ///< the move before this touch was an injected outlier
   /// The object slipped, or the sensor was kidnapped, just before this touch (injected).
   bool moved_unseen = false;
@@ -140,6 +144,7 @@ struct sequence_result {
   bool raised_dark = false;
   std::vector<touch_record> touches;
   std::vector<image<float>> tactile_images;  ///< preprocessed, map scale (empty when rejected)
+  std::vector<tactile_frame> frames;         ///< the raw frames the simulator rendered
   std::vector<image<float>> beliefs;         ///< position belief after each touch (all hypotheses)
   /// The measurement model's log-likelihood over the filter's states for each touch (empty for
   /// a rejected frame), filled only when asked for (`keep_log_likelihoods`): what a calibration
@@ -393,13 +398,17 @@ class localization_experiment {
       }
       pressed.x_mm += offset_mm;
       pressed.y_mm += offset_mm;
-      const preprocessed_frame pre =
-          preprocess(simulator.render(pressed, press), config_.preprocessing);
+      tactile_frame frame = simulator.render(pressed, press);
+      const preprocessed_frame pre = preprocess(frame, config_.preprocessing);
       touch_record rec;
       rec.step = step;
       rec.location = st.location;
       rec.true_x_mm = truth.x_mm;
       rec.true_y_mm = truth.y_mm;
+      if (step > 0) {
+        rec.reported_dx_mm = reported.dx_mm;
+        rec.reported_dy_mm = reported.dy_mm;
+      }
       rec.odometry_outlier = faulted.outlier[step] != 0;
       rec.moved_unseen =
           step + 1 == config_.faults.slip_touch || step + 1 == config_.faults.kidnap_touch;
@@ -442,6 +451,7 @@ class localization_experiment {
       if (keep_images) {
         result.tactile_images.push_back(rec.accepted ? pre.pixels : image<float>{});
         result.beliefs.push_back(position_belief(filter));
+        result.frames.push_back(std::move(frame));
       }
     }
     return result;

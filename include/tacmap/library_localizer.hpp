@@ -1,0 +1,298 @@
+// tacmap: `library_localizer` — which object, and where: the front door over a library of maps.
+//
+// A robot that has photographed several objects does not know which one its hand closed on.
+// `library_localizer` takes the photographs (each at its own size and scale) and answers both
+// questions from the same touches: the belief over (object, appearance, position) is one
+// `bayes_filter` over a `library_grid` whose objects are the grids `localizer` would use for each
+// photograph (`make_library_filter`), with the localizer's defaults — the latent appearance per
+// object, the robust motion, the calibrated measurement model. Each touch reports every object's
+// posterior, the most probable object and the position on its map, and a verdict whose
+// probability is the joint one: the right object *and* within the radius.
+//
+// Photographs may come at different sizes and scales. The objects are compared by the absolute
+// log-likelihoods of their maps, and the shipped descriptors cover a fixed number of pixels: at
+// different scales they would describe different physical areas, and their likelihoods would not
+// be on one scale. So the library works at one scale (by default the coarsest of the maps; any
+// other can be given): each map is resampled to it (`rescale`: area-averaged when shrinking,
+// bilinear when enlarging), positions stay in each map's own millimetres. A scale at which the
+// sensor's window is too small for the model's descriptors is refused with the map's name.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/filter/confidence.hpp"
+#include "tacmap/grid/latent_grid.hpp"
+#include "tacmap/grid/library_grid.hpp"
+#include "tacmap/grid/planar_grid.hpp"
+#include "tacmap/image.hpp"
+#include "tacmap/localizer.hpp"
+#include "tacmap/measurement/appearance_likelihood.hpp"
+#include "tacmap/measurement/library_likelihood.hpp"
+#include "tacmap/motion/latent_motion.hpp"
+#include "tacmap/motion/library_motion.hpp"
+#include "tacmap/motion/odometry_gaussian.hpp"
+#include "tacmap/motion/robust_motion.hpp"
+#include "tacmap/tactile/preprocess.hpp"
+
+namespace tacmap {
+
+/// One object of a library: its name, its photograph (intensities, any range, row 0 at the
+/// top) and the photograph's scale.
+struct library_map {
+  std::string name;
+  image<float> map;
+  double mm_per_px = 0.0;
+};
+
+/// The filter a `library_localizer` runs: objects x appearance hypotheses x positions (known
+/// heading), each object's block the filter `make_planar_filter` builds for its map.
+using library_localizer_filter =
+    bayes_filter<library_grid<latent_grid<planar_grid<float>>>,
+                 library_motion<robust_motion<latent_motion<odometry_gaussian>>>,
+                 library_likelihood<appearance_likelihood<configured_measurement>>>;
+
+namespace detail {
+// Checks a library's maps: at least one, each named, non-empty, finite, with a valid scale, and
+// no map given twice (the same image at the same scale).
+inline void check_library(const std::vector<library_map>& maps) {
+  if (maps.empty())
+    fail(
+        "library: the library is empty; expected at least one map (a photograph of each object "
+        "the robot may touch)");
+  for (std::size_t k = 0; k < maps.size(); ++k) {
+    const library_map& m = maps[k];
+    if (m.map.size() == 0)
+      fail("library: the map of '", m.name, "' (object ", k,
+           ") is empty; expected an image of the object (e.g. tacmap::load_image)");
+    if (!m.map.allFinite())
+      fail("library: the map of '", m.name, "' (object ", k,
+           ") has non-finite pixels; expected finite intensities");
+    if (!(std::isfinite(m.mm_per_px) && m.mm_per_px > 0.0))
+      fail("library: mm_per_px = ", m.mm_per_px, " for '", m.name, "' (object ", k,
+           "); expected the map's scale, a finite value > 0 millimetres per pixel");
+    for (std::size_t j = 0; j < k; ++j)
+      if (maps[j].mm_per_px == m.mm_per_px && maps[j].map.rows() == m.map.rows() &&
+          maps[j].map.cols() == m.map.cols() && (maps[j].map == m.map).all())
+        fail("library: '", maps[j].name, "' (object ", j, ") and '", m.name, "' (object ", k,
+             ") are the same image at the same scale; expected each object once — no touch "
+             "could tell them apart (two different objects that look alike keep equal "
+             "posteriors, reported by estimate().tied_objects)");
+  }
+}
+}  // namespace detail
+
+/// The scale a library of `maps` works at (see the file comment): `wanted` when given (finite,
+/// > 0), else the coarsest of the maps' scales. Throws std::invalid_argument for an invalid
+/// library or scale.
+[[nodiscard]] inline double library_scale(const std::vector<library_map>& maps,
+                                          std::optional<double> wanted = {}) {
+  detail::check_library(maps);
+  if (wanted) {
+    if (!(std::isfinite(*wanted) && *wanted > 0.0))
+      detail::fail("library: the library's scale is ", *wanted,
+                   " mm per px; expected a finite value > 0 (or none: the coarsest map's)");
+    return *wanted;
+  }
+  double coarsest = 0.0;
+  for (const library_map& m : maps) coarsest = std::max(coarsest, m.mm_per_px);
+  return coarsest;
+}
+
+/// The filter over a library that `library_localizer` runs: each map resampled to the library's
+/// scale `library_scale(maps, mm_per_px)`, and for each the planar filter `make_planar_filter`
+/// would build, as one block of a `library_grid`. `prior`: each object's prior probability
+/// (empty: uniform). Known headings only (`config.headings` = 0). Throws std::invalid_argument
+/// for an empty library, a map that is empty, non-finite, given twice or smaller than the sensor
+/// at the library's scale, a scale at which the model cannot describe the sensor's window,
+/// repeated names, a prior that does not sum to one, or an invalid configuration.
+[[nodiscard]] inline library_localizer_filter make_library_filter(
+    const localizer_config& config, const std::vector<library_map>& maps,
+    const taxel_geometry& sensor = {}, std::vector<double> prior = {},
+    std::optional<double> mm_per_px = {}) {
+  config.validate();
+  if (config.headings != 0)
+    detail::fail("make_library_filter: headings = ", config.headings,
+                 "; a library is localized with a known heading (headings = 0) for now — "
+                 "build a library_grid of pose grids yourself for unknown headings");
+  const double scale = library_scale(maps, mm_per_px);
+  const auto appearances = config.appearances();
+  std::vector<latent_grid<planar_grid<float>>> grids;
+  std::vector<appearance_likelihood<configured_measurement>> models;
+  std::vector<std::string> names;
+  for (const library_map& m : maps) {
+    const std::string who = "library: '" + m.name + "' at the library's scale";
+    const image<float> map = rescale(m.map, m.mm_per_px, scale);
+    const pixel_size window =
+        checked_tactile_window(sensor, scale, {map.cols(), map.rows()}, who.c_str());
+    grids.emplace_back(
+        planar_grid<float>({.width = map.cols(), .height = map.rows()}, scale, window),
+        appearance_names(appearances));
+    try {
+      models.emplace_back(configured_measurement(config, map, window), appearances);
+    } catch (const std::invalid_argument& e) {
+      detail::fail(who, " (", scale, " mm per px, the sensor's window ", window.width, " x ",
+                   window.height, " px): ", e.what(),
+                   " — give the library a finer scale (make_library_filter's mm_per_px)");
+    }
+    names.push_back(m.name);
+  }
+  return library_localizer_filter(
+      library_grid<latent_grid<planar_grid<float>>>(std::move(grids), std::move(names),
+                                                    std::move(prior)),
+      library_motion(robust_motion(
+          latent_motion<odometry_gaussian>(
+              odometry_gaussian({.sigma_mm = config.motion_sigma_mm, .k = config.motion_k}),
+              {.switch_probability = config.switch_probability()}),
+          detail::robust_params(config))),
+      library_likelihood<appearance_likelihood<configured_measurement>>(std::move(models)));
+}
+
+/// What one touch on a library gave.
+struct library_touch_result {
+  /// localized: the most probable object and `position_mm` on its map are right with the
+  /// belief's probability `probability_within` >= the threshold; see `touch_result`.
+  tacmap::verdict verdict = tacmap::verdict::uncertain;
+  /// The most probable object (index into the library) and its name.
+  Eigen::Index object = 0;
+  std::string object_name;
+  /// Every object's posterior (the library's order).
+  std::vector<double> object_probability;
+  /// Other objects as probable as `object` (identical maps): the position holds on each.
+  std::vector<Eigen::Index> tied_objects;
+  /// The estimate on `object`'s map (mm): the centre of the disc of `confidence.radius_mm` that
+  /// holds the most belief.
+  Eigen::Vector2d position_mm = Eigen::Vector2d::Zero();
+  /// P(object is right and |position - position_mm| <= radius).
+  double probability_within = 0.0;
+  /// `object`'s appearance hypotheses' posteriors (as photographed, inverted).
+  std::vector<double> appearance_probability;
+  double log_prediction_support = 0.0;  ///< see `touch_result`
+  frame_rejection rejection = frame_rejection::none;
+  bool restarted = false;   ///< see `touch_result`
+  std::size_t touches = 0;  ///< touches used since construction or `reset()`
+  [[nodiscard]] bool accepted() const { return rejection == frame_rejection::none; }
+};
+
+/// Which object, and where, from map to estimate: `localizer` over a library of photographs.
+///
+///     tacmap::library_localizer loc({{"mug", mug, 0.2}, {"box", box, 0.25}});
+///     auto r = loc.touch(frame);
+///     r = loc.touch(frame, tacmap::odometry{.dx_mm = 4.0});
+///     if (r.verdict == tacmap::verdict::localized) use(r.object_name, r.position_mm);
+///
+/// Preparing the maps happens once, in the constructor. Not thread-safe.
+class library_localizer {
+ public:
+  /// Throws std::invalid_argument as `make_library_filter`.
+  /// `mm_per_px`: the scale the library works at (default: the coarsest map's; see the file
+  /// comment). Throws std::invalid_argument as `make_library_filter`.
+  explicit library_localizer(const std::vector<library_map>& maps, localizer_config config = {},
+                             taxel_geometry sensor = {}, std::vector<double> prior = {},
+                             std::optional<double> mm_per_px = {})
+      : config_(std::move(config)),
+        sensor_(sensor),
+        filter_(make_library_filter(config_, maps, sensor_, std::move(prior), mm_per_px)) {
+    config_.preprocessing.mm_per_px = library_scale(maps, mm_per_px);
+  }
+
+  /// The first touch of an exploration (or one without motion since the previous touch).
+  library_touch_result touch(const tactile_frame& frame) { return step(frame, std::nullopt); }
+
+  /// A touch after the sensor moved by `moved` (map frame, mm; the same for every object: the
+  /// arm's motion) since the previous call.
+  library_touch_result touch(const tactile_frame& frame, const odometry& moved) {
+    if (!(std::isfinite(moved.dx_mm) && std::isfinite(moved.dy_mm)))
+      detail::fail("library_localizer::touch: the motion (", moved.dx_mm, ", ", moved.dy_mm,
+                   ") mm is not finite; expected finite millimetres — the position source "
+                   "delivered an invalid sample");
+    return step(frame, moved);
+  }
+
+  /// Starts a new exploration: each object's prior, a uniform belief on each map.
+  void reset() {
+    filter_.reset();
+    calls_ = 0;
+    touches_ = 0;
+  }
+
+  [[nodiscard]] const library_localizer_filter& filter() const { return filter_; }
+  /// The configuration, with `preprocessing.mm_per_px` set to the library's scale.
+  [[nodiscard]] const localizer_config& config() const { return config_; }
+  /// The scale every map was resampled to, mm per px.
+  [[nodiscard]] double mm_per_px() const { return config_.preprocessing.mm_per_px; }
+  [[nodiscard]] Eigen::Index objects() const { return filter_.grid().objects(); }
+  /// Object k's position belief (summed over its appearance hypotheses), conditioned on k, as
+  /// an image of its grid's positions; throws std::domain_error when k has posterior 0.
+  [[nodiscard]] image<float> object_belief_image(Eigen::Index k) const {
+    const auto& g = filter_.grid().object(k);
+    const auto block = object_belief(filter_.grid(), filter_.belief(), k);
+    const auto positions = marginal_belief(g, block);
+    return Eigen::Map<const image<float>>(positions.data(), g.rows(), g.cols());
+  }
+
+ private:
+  library_touch_result step(const tactile_frame& frame, const std::optional<odometry>& moved) {
+    if (frame.geometry != sensor_)
+      detail::fail("library_localizer::touch: the frame is ", frame.geometry.rows, " x ",
+                   frame.geometry.cols, " taxels at ", frame.geometry.pitch_mm,
+                   " mm, but this library was built for ", sensor_.rows, " x ", sensor_.cols,
+                   " at ", sensor_.pitch_mm, " mm; build it with the frame's geometry");
+    // Preprocess first: a malformed frame throws before anything changes.
+    const preprocessed_frame pre = preprocess(frame, config_.preprocessing);
+    library_touch_result r;
+    if (calls_ > 0 && moved) {
+      try {
+        filter_.predict(*moved);
+      } catch (const std::domain_error&) {
+        filter_.reset();  // every state the belief allowed left every map: start again
+        r.restarted = true;
+      }
+    }
+    ++calls_;
+    r.rejection = pre.rejection;
+    std::optional<update_report> report;
+    if (pre.accepted()) {
+      const std::vector<image<float>> view{pre.pixels};  // one scale: one view for every map
+      try {
+        report = filter_.update(view);
+      } catch (const std::domain_error&) {
+        if (touches_ == 0 && !r.restarted) throw;
+        filter_.reset();
+        r.restarted = true;
+        report = filter_.update(view);
+        report->log_prediction_support = -std::numeric_limits<double>::infinity();
+      }
+      ++touches_;
+    }
+    const auto est = filter_.estimate();
+    const confidence conf = report ? assess(filter_, est, *report, config_.confidence)
+                                   : assess(filter_, est, config_.confidence);
+    r.verdict = pre.accepted() ? conf.verdict : verdict::rejected_frame;
+    r.object = est.map_object;
+    r.object_name = filter_.grid().object_name(est.map_object);
+    r.object_probability = est.object_probability;
+    r.tied_objects = est.tied_objects;
+    r.position_mm = conf.centre_mm;
+    r.probability_within = conf.probability_within;
+    r.appearance_probability = est.hypothesis_probability;
+    if (report) r.log_prediction_support = report->log_prediction_support;
+    r.touches = touches_;
+    return r;
+  }
+
+  localizer_config config_;
+  taxel_geometry sensor_;
+  library_localizer_filter filter_;
+  std::size_t calls_ = 0;
+  std::size_t touches_ = 0;
+};
+
+}  // namespace tacmap

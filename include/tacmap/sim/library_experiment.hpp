@@ -1,0 +1,208 @@
+// tacmap: `library_experiment` — which object, and where, in simulation: sequences of touches on
+// one object of a library, localized by the filter over the whole library (issue 15).
+//
+// Each object is a protocol (its photograph, scale and touch sequences) simulated as
+// `localization_experiment` simulates one map: the scenario's camera map, registration error,
+// press variations and exploration faults. What differs from the world a single-object run
+// assumes is that the filter is not told which object is touched: it holds every object's map
+// (the camera map of each, as the robot photographed them) and must recognise the object from
+// the touches while it localizes them. Each object has one appearance for all its sequences (a
+// photograph is taken once): with a random polarity it is drawn per object, not per sequence.
+// The same touches also run through the filter of the touched object alone (what a robot that
+// knows the object gets), so every table can compare both on identical data. Maps at different
+// scales are resampled to the library's one scale (`make_library_filter`), and the touches are
+// preprocessed at it.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "tacmap/library_localizer.hpp"
+#include "tacmap/sim/experiment.hpp"
+
+namespace tacmap {
+
+/// One object of a simulated library: its name and its protocol (photograph, scale, sequences).
+struct library_object {
+  std::string name;
+  const touch_protocol* protocol = nullptr;  ///< must outlive the experiment
+};
+
+/// One sequence on one object of the library.
+struct library_sequence_result {
+  std::size_t object = 0;    ///< the object touched (index into the library)
+  std::size_t sequence = 0;  ///< the sequence of its protocol
+  bool raised_dark = false;  ///< the object's appearance: raised parts dark in its photograph
+  /// The library filter's touches: `error_mm` is the estimate's distance to the truth when the
+  /// most probable object is the touched one and +infinity otherwise (a position on the wrong
+  /// object is no position), so `localized()` and `touches_to_localize()` mean "on the right
+  /// object and within the radius"; `probability_within` and `verdict` are the joint ones.
+  std::vector<touch_record> touches;
+  /// The same touches through the filter of the touched object alone (the object known).
+  std::vector<touch_record> known_object;
+  /// After each touch: every object's posterior, and the most probable object.
+  std::vector<std::vector<double>> object_probability;
+  std::vector<std::size_t> decided;
+  /// After each touch: the objects the library filter evaluated (pruning).
+  std::vector<std::size_t> evaluated_objects;
+
+  /// True when after touch `t` (1-based) the touched object is the most probable one with a
+  /// posterior above `threshold`.
+  [[nodiscard]] bool recognized_at(std::size_t t, double threshold = 0.9) const {
+    return t >= 1 && t <= decided.size() && decided[t - 1] == object &&
+           object_probability[t - 1][object] > threshold;
+  }
+  /// The first touch (1-based) from which the object stays recognized; empty when it is not at
+  /// the last touch.
+  [[nodiscard]] std::optional<std::size_t> touches_to_recognize(double threshold = 0.9) const {
+    std::optional<std::size_t> first;
+    for (std::size_t t = 1; t <= decided.size(); ++t) {
+      if (recognized_at(t, threshold)) {
+        if (!first) first = t;
+      } else {
+        first.reset();
+      }
+    }
+    return first;
+  }
+};
+
+/// A library of simulated objects and the filter over all of them (see the file comment).
+class library_experiment {
+ public:
+  /// Throws std::invalid_argument for an empty library, a missing protocol, repeated names,
+  /// an unknown heading (the library filter is planar) or anything `localization_experiment`
+  /// and `make_library_filter` refuse.
+  library_experiment(std::vector<library_object> objects, localization_config config)
+      : objects_(std::move(objects)), config_(std::move(config)) {
+    config_.validate();
+    if (objects_.empty())
+      detail::fail("library_experiment: no objects; expected at least one (two or more to ",
+                   "recognise anything)");
+    if (config_.headings != 0 || config_.random_orientation)
+      detail::fail("library_experiment: headings = ", config_.headings, ", random orientation ",
+                   config_.random_orientation ? "on" : "off",
+                   "; the library filter localizes with a known heading: headings = 0 and no "
+                   "random orientation");
+    std::vector<library_map> maps;
+    for (std::size_t k = 0; k < objects_.size(); ++k) {
+      if (objects_[k].protocol == nullptr)
+        detail::fail("library_experiment: object ", k, " ('", objects_[k].name,
+                     "') has no protocol; expected its touch protocol");
+      localization_config c = config_;
+      if (c.scenario.polarity == relief_polarity::random) {
+        // One photograph per object: its appearance is drawn once, from its own stream.
+        std::uint64_t s = config_.simulator_seed ^ (0xC2B2AE3D27D4EB4FULL * (k + 1));
+        sim_rng rng(splitmix64(s));
+        c.scenario.polarity =
+            rng.uniform() < 0.5 ? relief_polarity::bright_raised : relief_polarity::dark_raised;
+      }
+      dark_.push_back(c.scenario.polarity == relief_polarity::dark_raised ? 1 : 0);
+      experiments_.push_back(std::make_unique<localization_experiment>(*objects_[k].protocol, c));
+      maps.push_back(
+          {objects_[k].name, experiments_.back()->visual_map(), objects_[k].protocol->mm_per_px});
+    }
+    filter_.emplace(make_library_filter(config_, maps, config_.simulator.geometry));
+    // The touches as the library sees them: at its one scale (the coarsest map's).
+    config_.preprocessing.mm_per_px = library_scale(maps);
+  }
+
+  [[nodiscard]] std::size_t objects() const { return objects_.size(); }
+  [[nodiscard]] const library_object& object(std::size_t k) const { return objects_.at(k); }
+  [[nodiscard]] const localization_config& config() const { return config_; }
+  [[nodiscard]] const library_localizer_filter& filter() const { return *filter_; }
+  /// Object k's appearance: raised parts dark in its photograph.
+  [[nodiscard]] bool raised_dark(std::size_t k) const { return dark_.at(k) != 0; }
+  /// The map the library holds for object k (its camera map).
+  [[nodiscard]] const image<float>& visual_map(std::size_t k) const {
+    return experiments_.at(k)->visual_map();
+  }
+
+  /// Replays sequence `sequence` of object `object`'s protocol through the library filter
+  /// (from its prior) and through that object's own filter. Throws std::invalid_argument for an
+  /// object or sequence out of range.
+  [[nodiscard]] library_sequence_result run(std::size_t object, std::size_t sequence) {
+    if (object >= objects_.size())
+      detail::fail("library_experiment::run: object ", object, "; expected 0 .. ",
+                   objects_.size() - 1);
+    // The touched object's simulation (frames, truth, odometry) and its own filter's run.
+    sequence_result single = experiments_[object]->run(sequence, true);
+    library_localizer_filter& f = *filter_;
+    f.reset();
+    library_sequence_result out;
+    out.object = object;
+    out.sequence = sequence;
+    out.raised_dark = raised_dark(object);
+    out.known_object = single.touches;
+    for (std::size_t t = 0; t < single.touches.size(); ++t) {
+      touch_record rec = single.touches[t];
+      rec.lost_track = false;
+      if (t > 0) {
+        try {
+          f.predict({.dx_mm = rec.reported_dx_mm, .dy_mm = rec.reported_dy_mm});
+        } catch (const std::domain_error&) {
+          f.reset();
+          rec.lost_track = true;
+        }
+      }
+      const preprocessed_frame pre = preprocess(single.frames[t], config_.preprocessing);
+      rec.accepted = pre.accepted();
+      rec.rejection = pre.rejection;
+      std::optional<update_report> report;
+      if (pre.accepted()) {
+        const std::vector<image<float>> view{pre.pixels};
+        try {
+          report = f.update(view);
+        } catch (const std::domain_error&) {
+          f.reset();
+          rec.lost_track = true;
+          report = f.update(view);
+        }
+        rec.log_marginal_likelihood = report->log_marginal_likelihood();
+        rec.log_prediction_support = report->log_prediction_support;
+        rec.contradicted = report->log_prediction_support < config_.confidence.contradiction;
+      }
+      const auto est = f.estimate();
+      const confidence conf = assess(f, est, config_.confidence);
+      const auto decided = static_cast<std::size_t>(est.map_object);
+      rec.probability_within = conf.probability_within;
+      rec.verdict = conf.verdict;
+      rec.estimate_x_mm = conf.centre_mm(0);
+      rec.estimate_y_mm = conf.centre_mm(1);
+      rec.map_x_mm = est.map_mm(0);
+      rec.map_y_mm = est.map_mm(1);
+      const double inf = std::numeric_limits<double>::infinity();
+      rec.error_mm = decided == object ? std::hypot(rec.estimate_x_mm - rec.true_x_mm,
+                                                    rec.estimate_y_mm - rec.true_y_mm)
+                                       : inf;
+      rec.map_error_mm =
+          decided == object ? std::hypot(rec.map_x_mm - rec.true_x_mm, rec.map_y_mm - rec.true_y_mm)
+                            : inf;
+      rec.entropy_nats = est.entropy_nats;
+      rec.appearance_probability = est.hypothesis_probability;
+      out.touches.push_back(rec);
+      out.object_probability.push_back(est.object_probability);
+      out.decided.push_back(decided);
+      std::size_t evaluated = 0;
+      for (const bool e : f.measurement_model().evaluated()) evaluated += e ? 1U : 0U;
+      out.evaluated_objects.push_back(report ? evaluated : 0U);
+    }
+    return out;
+  }
+
+ private:
+  std::vector<library_object> objects_;
+  localization_config config_;
+  std::vector<std::unique_ptr<localization_experiment>> experiments_;
+  std::vector<char> dark_;
+  std::optional<library_localizer_filter> filter_;
+};
+
+}  // namespace tacmap

@@ -1,0 +1,159 @@
+// tacmap-evaluate --library: which object, and where (issue 15). Every map of the run is one
+// object of one library; each sequence is a protocol sequence on a random object, localized by
+// the filter over the whole library (`library_experiment`), and by the touched object's own
+// filter on the same touches (the object known) for comparison.
+#pragma once
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "tacmap/sim/library_experiment.hpp"
+#include "tacmap/sim/random.hpp"
+
+namespace tacmap_tools {
+
+struct library_tally {
+  std::size_t sequences = 0;
+  std::vector<std::size_t> recognized;  // per touch number: touched object decided, P > 0.9
+  std::size_t recognized_by_4 = 0;      // recognized at touch 4
+  std::size_t localized = 0;            // < 5 mm on the right object from touch 6 on
+  std::size_t localized_known = 0;      // the same touches, the object known
+  std::size_t wrong_at_end = 0;         // another object decided at the last touch
+  std::vector<double> to_recognize;     // touches until recognized for good
+  std::vector<double> evaluated;        // per touch number: objects evaluated, summed
+  std::vector<std::size_t> touches_at;  // per touch number: how many sequences have one
+
+  void add(const tacmap::library_sequence_result& r) {
+    ++sequences;
+    const std::size_t n = r.touches.size();
+    if (recognized.size() < n) {
+      recognized.resize(n);
+      evaluated.resize(n);
+      touches_at.resize(n);
+    }
+    for (std::size_t t = 1; t <= n; ++t) {
+      recognized[t - 1] += r.recognized_at(t) ? 1U : 0U;
+      evaluated[t - 1] += static_cast<double>(r.evaluated_objects[t - 1]);
+      ++touches_at[t - 1];
+    }
+    recognized_by_4 += r.recognized_at(std::min<std::size_t>(4, n)) ? 1U : 0U;
+    localized += tacmap::localized(r.touches) ? 1U : 0U;
+    localized_known += tacmap::localized(r.known_object) ? 1U : 0U;
+    wrong_at_end += !r.decided.empty() && r.decided.back() != r.object ? 1U : 0U;
+    if (const auto t = r.touches_to_recognize()) to_recognize.push_back(static_cast<double>(*t));
+  }
+};
+
+inline std::string library_percent(std::size_t k, std::size_t n) {
+  if (n == 0) return "-";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f", 100.0 * static_cast<double>(k) / static_cast<double>(n));
+  return buf;
+}
+
+/// Runs `sequences` library sequences per configuration over `objects` (each with its
+/// protocol), printing the tables (Markdown) to stdout and one row per touch to `csv`. Returns
+/// false when a localization rate is below `min_success` (a fraction; negative: no floor).
+inline bool run_library_evaluation(const std::vector<tacmap::library_object>& objects,
+                                   const std::vector<tacmap::localization_config>& configs,
+                                   std::size_t sequences, std::size_t max_sequences,
+                                   std::uint64_t seed, double min_success, bool quiet,
+                                   std::ostream& csv) {
+  csv << "config,object,sequence,touch,decided,p_true_object,error_mm,known_error_mm,"
+         "probability_within,verdict,objects_evaluated,raised_dark\n";
+  bool below_floor = false;
+  const std::size_t k_objects = objects.size();
+  std::printf(
+      "| configuration | objects | sequences | recognized %% (right object, P > 0.9) at touch 1, "
+      "2, ... | recognized by touch 4 %% | localized %%: library / object known | median touches "
+      "to recognize | wrong object at the last touch | objects evaluated per touch (of %zu) |\n"
+      "|---|---|---|---|---|---|---|---|---|\n",
+      k_objects);
+  for (const auto& config : configs) {
+    if (!quiet) std::fprintf(stderr, "%s: preparing %zu maps\n", config.name().c_str(), k_objects);
+    tacmap::library_experiment experiment(objects, config);
+    library_tally total;
+    std::vector<library_tally> per_object(k_objects);
+    std::vector<std::vector<std::size_t>> confusion(k_objects, std::vector<std::size_t>(k_objects));
+    // Which object and which of its sequences: their own stream, fixed by the seed.
+    std::uint64_t s = seed ^ 0x6A09E667F3BCC909ULL;
+    tacmap::sim_rng rng(tacmap::splitmix64(s));
+    for (std::size_t q = 0; q < sequences; ++q) {
+      const auto object = std::min(
+          k_objects - 1, static_cast<std::size_t>(rng.uniform() * static_cast<double>(k_objects)));
+      std::size_t n = objects[object].protocol->sequences.size();
+      if (max_sequences > 0) n = std::min(n, max_sequences);
+      const auto index =
+          std::min(n - 1, static_cast<std::size_t>(rng.uniform() * static_cast<double>(n)));
+      const auto r = experiment.run(object, index);
+      total.add(r);
+      per_object[object].add(r);
+      if (!r.decided.empty()) ++confusion[object][r.decided.back()];
+      for (std::size_t t = 0; t < r.touches.size(); ++t) {
+        char line[512];
+        std::snprintf(line, sizeof line, "%s,%s,%zu,%zu,%s,%.4f,%.4f,%.4f,%.4f,%s,%zu,%d\n",
+                      config.name().c_str(), objects[object].name.c_str(), index, t + 1,
+                      objects[r.decided[t]].name.c_str(), r.object_probability[t][object],
+                      r.touches[t].error_mm, r.known_object[t].error_mm,
+                      r.touches[t].probability_within, tacmap::to_string(r.touches[t].verdict),
+                      r.evaluated_objects[t], r.raised_dark ? 1 : 0);
+        csv << line;
+      }
+      if (!quiet) std::fprintf(stderr, "\r%zu/%zu sequences", q + 1, sequences);
+    }
+    if (!quiet) std::fprintf(stderr, "\r%*s\r", 40, "");
+    std::string per_touch, evaluated;
+    for (std::size_t t = 0; t < total.recognized.size(); ++t) {
+      per_touch += (t ? ", " : "") + library_percent(total.recognized[t], total.touches_at[t]);
+      char buf[32];
+      std::snprintf(
+          buf, sizeof buf, "%.1f",
+          total.evaluated[t] / static_cast<double>(std::max<std::size_t>(1, total.touches_at[t])));
+      evaluated += (t ? ", " : "") + std::string(buf);
+    }
+    char ttr[32] = "-";
+    if (!total.to_recognize.empty())
+      std::snprintf(ttr, sizeof ttr, "%.1f", tacmap::median(total.to_recognize));
+    std::printf("| %s | %zu | %zu | %s | %s | %s / %s | %s | %zu | %s |\n", config.name().c_str(),
+                k_objects, total.sequences, per_touch.c_str(),
+                library_percent(total.recognized_by_4, total.sequences).c_str(),
+                library_percent(total.localized, total.sequences).c_str(),
+                library_percent(total.localized_known, total.sequences).c_str(), ttr,
+                total.wrong_at_end, evaluated.c_str());
+    // Per object, and the confusion matrix at the last touch.
+    std::printf(
+        "\n| object (%s) | raised parts in the photo | sequences | recognized by touch 4 | "
+        "localized: library / object known |\n|---|---|---|---|---|\n",
+        config.name().c_str());
+    for (std::size_t k = 0; k < k_objects; ++k) {
+      const library_tally& t = per_object[k];
+      std::printf("| %s | %s | %zu | %zu | %zu / %zu |\n", objects[k].name.c_str(),
+                  experiment.raised_dark(k) ? "dark" : "bright", t.sequences, t.recognized_by_4,
+                  t.localized, t.localized_known);
+    }
+    std::printf(
+        "\nConfusion at the last touch (rows: touched object; columns: most probable):\n\n| |");
+    for (std::size_t k = 0; k < k_objects; ++k) std::printf(" %s |", objects[k].name.c_str());
+    std::printf("\n|---|");
+    for (std::size_t k = 0; k < k_objects; ++k) std::printf("---|");
+    std::printf("\n");
+    for (std::size_t a = 0; a < k_objects; ++a) {
+      std::printf("| %s |", objects[a].name.c_str());
+      for (std::size_t b = 0; b < k_objects; ++b) std::printf(" %zu |", confusion[a][b]);
+      std::printf("\n");
+    }
+    std::printf("\n");
+    std::fflush(stdout);
+    if (min_success >= 0.0 && total.sequences > 0 &&
+        static_cast<double>(total.localized) < min_success * static_cast<double>(total.sequences))
+      below_floor = true;
+  }
+  return !below_floor;
+}
+
+}  // namespace tacmap_tools
