@@ -6,8 +6,12 @@
 // exponential (the default); pose: sift_lite rotated model, 36 headings.
 #include <benchmark/benchmark.h>
 
+#include <string>
+#include <vector>
+
 #include "bench_maps.hpp"
 #include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/library_localizer.hpp"
 #include "tacmap/localizer.hpp"
 #include "tacmap/tacmap.hpp"
 
@@ -124,5 +128,46 @@ BENCHMARK_CAPTURE(pose_touch_default_filter, no_wide, 0.0)->Unit(benchmark::kMil
 BENCHMARK_CAPTURE(pose_touch_default_filter, wide_default,
                   tacmap::localizer_config::default_wide_probability)
     ->Unit(benchmark::kMillisecond);
+
+// Which object, and where (issue 15): one touch (predict + update) of the library filter
+// (make_library_filter: the localizer's default filter per object) over N objects of the bench
+// map's size, each its own map. Against planar_touch_default_filter (one object, the same filter)
+// the cost should grow linearly with the library's states: N x. /all: every object evaluated
+// at every touch (pruning off); /pruned: the default, after 8 touches on object 0, when the
+// other objects' posteriors are below library_likelihood_params::prune_below and cost nothing.
+void library_touch(benchmark::State& state, bool prune) {
+  const auto objects = static_cast<unsigned>(state.range(0));
+  std::vector<tacmap::library_map> maps;
+  for (unsigned k = 0; k < objects; ++k)
+    maps.push_back({"object " + std::to_string(k), bench_map(120, 120, 9 + k), 3.4 / 3.0});
+  auto filter = tacmap::make_library_filter({}, maps);
+  if (!prune) filter.measurement_model().set_params({.prune_below = 0.0});
+  const auto& map = maps[0].map;
+  const std::vector<tacmap::image<float>> a{map.block(30, 40, 42, 18)};
+  const std::vector<tacmap::image<float>> b{map.block(30, 44, 42, 18)};
+  const tacmap::odometry there{.dx_mm = 4.5, .dy_mm = 0.0}, back{.dx_mm = -4.5, .dy_mm = 0.0};
+  bool at_a = true;
+  const auto touch = [&] {
+    filter.predict(at_a ? there : back);
+    filter.update(at_a ? b : a);
+    at_a = !at_a;
+  };
+  filter.update(a);
+  for (int warm = 0; warm < 8; ++warm) touch();
+  for (auto _ : state) {
+    touch();
+    benchmark::DoNotOptimize(filter.belief().data());
+  }
+  std::size_t evaluated = 0;
+  for (const bool e : filter.measurement_model().evaluated()) evaluated += e ? 1U : 0U;
+  state.counters["objects_evaluated"] = static_cast<double>(evaluated);
+}
+BENCHMARK_CAPTURE(library_touch, all, false)
+    ->Arg(1)
+    ->Arg(2)
+    ->Arg(4)
+    ->Arg(8)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(library_touch, pruned, true)->Arg(8)->Unit(benchmark::kMicrosecond);
 
 }  // namespace

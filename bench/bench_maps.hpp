@@ -12,8 +12,9 @@
 
 namespace tacmap_bench {
 
-inline tacmap::image<float> bench_map(Eigen::Index rows = 120, Eigen::Index cols = 120) {
-  std::mt19937 rng(9);
+inline tacmap::image<float> bench_map(Eigen::Index rows = 120, Eigen::Index cols = 120,
+                                      unsigned seed = 9) {
+  std::mt19937 rng(seed);
   tacmap::image<float> map = tacmap::image<float>::Zero(rows, cols);
   const auto bars = static_cast<int>(20 * (rows * cols) / (120 * 120));
   for (int bar = 0; bar < bars; ++bar)

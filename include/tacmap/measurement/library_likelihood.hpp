@@ -61,11 +61,7 @@ class library_likelihood {
       detail::fail(
           "library_likelihood: no models; expected one measurement model per object of the "
           "library");
-    if (!(std::isfinite(params_.prune_below) && params_.prune_below >= 0.0 &&
-          params_.prune_below <= 0.01))
-      detail::fail("library_likelihood: prune_below = ", params_.prune_below,
-                   "; expected a posterior in [0, 0.01] below which an object stops being "
-                   "evaluated (0 = never)");
+    check(params_);
   }
 
   [[nodiscard]] Eigen::Index objects() const { return static_cast<Eigen::Index>(models_.size()); }
@@ -73,6 +69,12 @@ class library_likelihood {
     return models_.at(static_cast<std::size_t>(k));
   }
   [[nodiscard]] const library_likelihood_params& params() const { return params_; }
+  /// Replaces the parameters (e.g. pruning off for an exhaustive run); throws
+  /// std::invalid_argument for invalid ones, parameters unchanged.
+  void set_params(const library_likelihood_params& params) {
+    check(params);
+    params_ = params;
+  }
   /// The objects the last update evaluated (false: pruned, see the file comment).
   [[nodiscard]] const std::vector<bool>& evaluated() const { return evaluated_; }
 
@@ -93,6 +95,13 @@ class library_likelihood {
   }
 
  private:
+  static void check(const library_likelihood_params& p) {
+    if (!(std::isfinite(p.prune_below) && p.prune_below >= 0.0 && p.prune_below <= 0.01))
+      detail::fail("library_likelihood: prune_below = ", p.prune_below,
+                   "; expected a posterior in [0, 0.01] below which an object stops being "
+                   "evaluated (0 = never)");
+  }
+
   template <class G>
   void evaluate(const G& grid, const measurement_type& z, belief_array<G>& out,
                 const belief_array<G>* predicted) const {
