@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "tacmap/config.hpp"
+#include "tacmap/image.hpp"
 #include "tacmap/motion/concept.hpp"
 
 namespace tacmap::detail {
