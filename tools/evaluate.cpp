@@ -207,6 +207,7 @@ int main(int argc, char** argv) try {
   bool quiet = false;
   bool library = false;
   long long library_sequences = -1;  // -1: as many as the maps' sequences together
+  tacmap::library_likelihood_params library_params;
   // Overrides of the scenario's knobs: empty = the scenario's value.
   struct knob {
     const char* flag;
@@ -345,6 +346,12 @@ int main(int argc, char** argv) try {
                "localization, confusion)");
   app.add_option("--library-sequences", library_sequences,
                  "--library: sequences per configuration (default: the maps' sequences together)");
+  app.add_option("--evidence-exponent", library_params.evidence_exponent,
+                 "--library: exponent on each object's evidence (1 = Bayes)")
+      ->check(CLI::Range(0.25, 8.0));
+  app.add_option("--prune-below", library_params.prune_below,
+                 "--library: posterior below which an object is no longer evaluated (1e-9)")
+      ->check(CLI::Range(0.0, 0.01));
   app.add_flag("--quiet,-q", quiet, "no progress bar (it is drawn only when stderr is a terminal)");
   app.add_option("--scenario", scenario_name,
                  "ideal (the map's own image, a new sensor), realistic (camera map, "
@@ -601,7 +608,7 @@ int main(int argc, char** argv) try {
     const bool ok = tacmap_tools::run_library_evaluation(
         objects, configs,
         library_sequences > 0 ? static_cast<std::size_t>(library_sequences) : all_sequences,
-        max_sequences, seed, min_success, quiet, csv);
+        max_sequences, seed, min_success, quiet, csv, library_params);
     csv.close();
     if (!csv)
       tacmap::detail::fail<std::runtime_error>("tacmap-evaluate: writing '", output, "' failed");

@@ -63,8 +63,9 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
                                    const std::vector<tacmap::localization_config>& configs,
                                    std::size_t sequences, std::size_t max_sequences,
                                    std::uint64_t seed, double min_success, bool quiet,
-                                   std::ostream& csv) {
-  csv << "config,object,sequence,touch,decided,p_true_object,error_mm,known_error_mm,"
+                                   std::ostream& csv,
+                                   const tacmap::library_likelihood_params& params = {}) {
+  csv << "config,object,sequence,touch,decided,p_true_object,p_decided,error_mm,known_error_mm,"
          "probability_within,verdict,objects_evaluated,raised_dark\n";
   bool below_floor = false;
   const std::size_t k_objects = objects.size();
@@ -77,6 +78,7 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
   for (const auto& config : configs) {
     if (!quiet) std::fprintf(stderr, "%s: preparing %zu maps\n", config.name().c_str(), k_objects);
     tacmap::library_experiment experiment(objects, config);
+    experiment.set_library_params(params);
     library_tally total;
     std::vector<library_tally> per_object(k_objects);
     std::vector<std::vector<std::size_t>> confusion(k_objects, std::vector<std::size_t>(k_objects));
@@ -96,12 +98,13 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
       if (!r.decided.empty()) ++confusion[object][r.decided.back()];
       for (std::size_t t = 0; t < r.touches.size(); ++t) {
         char line[512];
-        std::snprintf(line, sizeof line, "%s,%s,%zu,%zu,%s,%.4f,%.4f,%.4f,%.4f,%s,%zu,%d\n",
+        std::snprintf(line, sizeof line, "%s,%s,%zu,%zu,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%s,%zu,%d\n",
                       config.name().c_str(), objects[object].name.c_str(), index, t + 1,
                       objects[r.decided[t]].name.c_str(), r.object_probability[t][object],
-                      r.touches[t].error_mm, r.known_object[t].error_mm,
-                      r.touches[t].probability_within, tacmap::to_string(r.touches[t].verdict),
-                      r.evaluated_objects[t], r.raised_dark ? 1 : 0);
+                      r.object_probability[t][r.decided[t]], r.touches[t].error_mm,
+                      r.known_object[t].error_mm, r.touches[t].probability_within,
+                      tacmap::to_string(r.touches[t].verdict), r.evaluated_objects[t],
+                      r.raised_dark ? 1 : 0);
         csv << line;
       }
       if (!quiet) std::fprintf(stderr, "\r%zu/%zu sequences", q + 1, sequences);

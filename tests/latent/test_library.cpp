@@ -292,3 +292,32 @@ TEST_CASE("library of latent grids: each object has its own appearance hypothese
   CHECK(e.map_hypothesis == 1);
   CHECK((e.map_index - f.grid().object_offset(1)) % positions.size() == positions.index(truth));
 }
+
+TEST_CASE("library_likelihood: an evidence exponent raises the objects' Bayes factors only") {
+  // With exponent beta the posterior odds of two objects are (E_box / E_cup)^beta; each
+  // object's position belief stays its own filter's.
+  const library g = two_objects();
+  const Eigen::ArrayXf ll_cup = Eigen::ArrayXf::LinSpaced(20, -3.0F, 1.0F);
+  Eigen::ArrayXf ll_box = Eigen::ArrayXf::LinSpaced(18, 0.5F, -2.0F);
+  ll_box(4) = 2.0F;
+  tacmap::bayes_filter cup(g.object(0), tacmap::odometry_gaussian{}, table_likelihood{});
+  tacmap::bayes_filter box(g.object(1), tacmap::odometry_gaussian{}, table_likelihood{});
+  const double lml_cup = cup.update(ll_cup).log_marginal_likelihood();
+  const double lml_box = box.update(ll_box).log_marginal_likelihood();
+  for (const double beta : {0.5, 1.0, 2.5}) {
+    CAPTURE(beta);
+    tacmap::bayes_filter f(g, tacmap::library_motion(tacmap::odometry_gaussian{}),
+                           tacmap::library_likelihood<table_likelihood>(
+                               std::vector<table_likelihood>(2), {.evidence_exponent = beta}));
+    f.update(std::vector<Eigen::ArrayXf>{ll_cup, ll_box});
+    const auto p = f.estimate().object_probability;
+    const double odds = std::exp(beta * (lml_box - lml_cup));
+    CHECK(p[1] == doctest::Approx(odds / (1.0 + odds)).epsilon(1e-5));
+    CHECK(tacmap::object_belief(f.grid(), f.belief(), 0).isApprox(cup.belief(), 1e-5F));
+    CHECK(tacmap::object_belief(f.grid(), f.belief(), 1).isApprox(box.belief(), 1e-5F));
+  }
+  CHECK(message_of([] {
+          tacmap::library_likelihood<table_likelihood>(std::vector<table_likelihood>(1),
+                                                       {.evidence_exponent = 0.0});
+        }).find("evidence_exponent = 0") != std::string::npos);
+}

@@ -19,6 +19,14 @@
 // trade of beam pruning — an object dropped this way does not come back, so epsilon must be
 // far below any posterior a real candidate reaches (the default 1e-9 is nine orders below).
 // 0 turns pruning off.
+//
+// Evidence exponent. The object posterior is prior x evidence, E_k = sum_x p(z | x, k)
+// bel_bar(x | k) per touch. Where the likelihood's scale is calibrated for positions but the
+// objects' posteriors come out under- or over-confident, `evidence_exponent` beta turns each
+// object's share into E_k^beta (adding (beta - 1) log E_k to its block: the position belief
+// within each object is untouched). 1, the default, is the Bayes update; any other value is a
+// calibration choice, to be fitted on data outside the evaluation (README, "Which object, and
+// where").
 #pragma once
 
 #include <cmath>
@@ -39,6 +47,10 @@ struct library_likelihood_params {
   /// Objects whose predicted posterior is below this are no longer evaluated (see the file
   /// comment); in [0, 0.01]. 0: every object at every touch.
   double prune_below = 1e-9;
+  /// Exponent beta on each object's evidence (see the file comment): the object posterior
+  /// becomes prior x evidence^beta, the position belief within an object is unchanged. 1: the
+  /// plain Bayes update. In [0.25, 8].
+  double evidence_exponent = 1.0;
 };
 
 /// Measurement model over `library_grid<G>`: object k's block gets `models[k]`'s
@@ -100,6 +112,10 @@ class library_likelihood {
       detail::fail("library_likelihood: prune_below = ", p.prune_below,
                    "; expected a posterior in [0, 0.01] below which an object stops being "
                    "evaluated (0 = never)");
+    if (!(std::isfinite(p.evidence_exponent) && p.evidence_exponent >= 0.25 &&
+          p.evidence_exponent <= 8.0))
+      detail::fail("library_likelihood: evidence_exponent = ", p.evidence_exponent,
+                   "; expected an exponent in [0.25, 8] on each object's evidence (1 = Bayes)");
   }
 
   template <class G>
@@ -133,6 +149,20 @@ class library_likelihood {
         detail::fail("library_likelihood: object ", k, "'s model resized its output to ",
                      block.size(), " values; expected ", n, " (one per state of its grid)");
       out.segment(at, n) = block;
+      if (predicted && params_.evidence_exponent != 1.0) {
+        // log E_k = log sum_x p(z | x, k) bel_bar(x | k), with the block's maximum taken out;
+        // adding (beta - 1) log E_k to the whole block leaves p(x | k) as it is and turns the
+        // object's share of the update into E_k^beta.
+        const auto pred = predicted->segment(at, n).template cast<double>();
+        const double mass = pred.sum();
+        const double top = static_cast<double>(block.maxCoeff());
+        if (mass > 0.0 && std::isfinite(top)) {
+          const double e = ((block.template cast<double>() - top).exp() * pred).sum() / mass;
+          if (e > 0.0)
+            out.segment(at, n) +=
+                static_cast<T>((params_.evidence_exponent - 1.0) * (top + std::log(e)));
+        }
+      }
     }
   }
 

@@ -118,6 +118,11 @@ class library_experiment {
   [[nodiscard]] const library_object& object(std::size_t k) const { return objects_.at(k); }
   [[nodiscard]] const localization_config& config() const { return config_; }
   [[nodiscard]] const library_localizer_filter& filter() const { return *filter_; }
+  /// The library's measurement parameters (pruning, evidence exponent); throws
+  /// std::invalid_argument for invalid ones.
+  void set_library_params(const library_likelihood_params& params) {
+    filter_->measurement_model().set_params(params);
+  }
   /// Object k's appearance: raised parts dark in its photograph.
   [[nodiscard]] bool raised_dark(std::size_t k) const { return dark_.at(k) != 0; }
   /// The map the library holds for object k (its camera map).
