@@ -37,36 +37,13 @@
 #include <string>
 #include <vector>
 
+#include "demo_objects.hpp"  // the horse's protocol
+#include "figure.hpp"        // the demo figures' drawing (stb_easy_font text, belief colour scale)
 #include "tacmap/io/image_file.hpp"  // write_png_compressed (stb_image_write; tacmap::image_file)
 #include "tacmap/io/image_io.hpp"
 #include "tacmap/io/png_rgb.hpp"
 #include "tacmap/sim/experiment.hpp"
 #include "tacmap/sim/protocol.hpp"
-
-// stb's quad font for the figure's text (ASCII, from libstb-dev like image_file.hpp's stb):
-// all its functions are static, and its warnings are stb's.
-#if defined(__clang__)
-#pragma clang diagnostic push
-#pragma clang diagnostic ignored "-Weverything"
-#elif defined(__GNUC__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wconversion"
-#pragma GCC diagnostic ignored "-Wsign-conversion"
-#pragma GCC diagnostic ignored "-Wold-style-cast"
-#pragma GCC diagnostic ignored "-Wunused-function"
-#pragma GCC diagnostic ignored "-Wdouble-promotion"
-#pragma GCC diagnostic ignored "-Wuseless-cast"
-#endif
-#if __has_include(<stb/stb_easy_font.h>)
-#include <stb/stb_easy_font.h>
-#else
-#include <stb_easy_font.h>
-#endif
-#if defined(__clang__)
-#pragma clang diagnostic pop
-#elif defined(__GNUC__)
-#pragma GCC diagnostic pop
-#endif
 
 #ifndef TACMAP_DATA_DIR
 #error "TACMAP_DATA_DIR must name tacmap's data/ folder"
@@ -74,264 +51,10 @@
 
 namespace {
 
-using tacmap::rgb_image;
-using index_t = Eigen::Index;
+using namespace tacmap_examples;  // the figures' drawing (figure.hpp)
 
-struct colour {
-  float r, g, b;
-};
-constexpr colour black{0.0F, 0.0F, 0.0F}, grey{0.35F, 0.35F, 0.35F};
-// Truth and estimate: green and cyan, apart from each other and from the belief's colour map
-// (inferno: black, purple, red, orange, yellow); their shapes differ too (solid box and ring
-// for the truth, dashed box and cross for the estimate), for readers who do not tell them apart.
-constexpr colour truth_colour{0.15F, 0.95F, 0.15F}, estimate_colour{0.0F, 0.85F, 1.0F};
+// The horse figure's appearance bar: P(raised parts look dark) against bright.
 constexpr colour dark_colour{0.95F, 0.55F, 0.1F}, bright_colour{0.25F, 0.45F, 0.85F};
-
-void put(rgb_image& img, index_t row, index_t col, colour c) { img.set(row, col, c.r, c.g, c.b); }
-
-void fill(rgb_image& img, index_t top, index_t left, index_t h, index_t w, colour c) {
-  for (index_t r = top; r < top + h; ++r)
-    for (index_t x = left; x < left + w; ++x) put(img, r, x, c);
-}
-
-// Text through stb_easy_font (stb's quad font: ASCII, 12 px per line at scale 1), each quad
-// filled as a `scale` x `scale` px block per font pixel.
-struct easy_font_vertex {
-  float x, y, z;
-  unsigned char rgba[4];
-};
-
-index_t text_width(const std::string& s, int scale) {
-  std::vector<char> text(s.begin(), s.end());
-  text.push_back('\0');
-  return static_cast<index_t>(stb_easy_font_width(text.data())) * scale;
-}
-
-// Draws `s` with its top-left corner at (top, left); returns the x just after it.
-index_t draw_text(rgb_image& img, index_t top, index_t left, const std::string& s, int scale,
-                  colour c = black) {
-  std::vector<char> text(s.begin(), s.end());
-  text.push_back('\0');
-  std::vector<easy_font_vertex> quads(s.size() * 4 * 24 + 64);
-  const int n = stb_easy_font_print(0.0F, 0.0F, text.data(), nullptr, quads.data(),
-                                    static_cast<int>(quads.size() * sizeof(easy_font_vertex)));
-  for (int q = 0; q < n; ++q) {
-    const easy_font_vertex& a = quads[static_cast<std::size_t>(4 * q)];
-    const easy_font_vertex& b = quads[static_cast<std::size_t>(4 * q + 2)];
-    const auto at = [scale](float v) {
-      return static_cast<index_t>(std::lround(v * static_cast<float>(scale)));
-    };
-    fill(img, top + at(a.y), left + at(a.x), at(b.y) - at(a.y), at(b.x) - at(a.x), c);
-  }
-  return left + text_width(s, scale);
-}
-
-// Several lines, `line_h` px apart; returns the y below the last.
-index_t draw_lines(rgb_image& img, index_t top, index_t left, const std::vector<std::string>& lines,
-                   int scale, index_t line_h, colour c = black) {
-  for (const auto& line : lines) {
-    draw_text(img, top, left, line, scale, c);
-    top += line_h;
-  }
-  return top;
-}
-
-// `text` split at spaces into lines at most `max_w` px wide at `scale`.
-std::vector<std::string> wrap(const std::string& text, int scale, index_t max_w) {
-  std::vector<std::string> lines;
-  std::string current;
-  std::size_t start = 0;
-  while (start < text.size()) {
-    std::size_t end = text.find(' ', start);
-    if (end == std::string::npos) end = text.size();
-    const std::string word = text.substr(start, end - start);
-    const std::string longer = current.empty() ? word : current + " " + word;
-    if (!current.empty() && text_width(longer, scale) > max_w) {
-      lines.push_back(current);
-      current = word;
-    } else {
-      current = longer;
-    }
-    start = end + 1;
-  }
-  if (!current.empty()) lines.push_back(current);
-  return lines;
-}
-
-// A grey image scaled up by `s` (nearest neighbour) with its top-left at (top, left).
-void blit_grey(rgb_image& img, const tacmap::image<float>& src, index_t top, index_t left, int s) {
-  for (index_t r = 0; r < src.rows() * s; ++r)
-    for (index_t c = 0; c < src.cols() * s; ++c) {
-      const float v = src(r / s, c / s);
-      img.set(top + r, left + c, v, v, v);
-    }
-}
-
-// Outline of a rectangle in screen px, 2 px thick, with a 1 px black edge outside and inside so
-// that it shows on any background; `dashed`: 6 px on, 4 px off.
-void draw_box(rgb_image& img, index_t r0, index_t c0, index_t r1, index_t c1, colour c,
-              bool dashed) {
-  const auto on = [dashed](index_t k) { return !dashed || (k % 10) < 6; };
-  const auto ring = [&](index_t inset, colour col, bool dash) {
-    for (index_t x = c0 + inset; x <= c1 - inset; ++x)
-      if (!dash || on(x - c0)) {
-        put(img, r0 + inset, x, col);
-        put(img, r1 - inset, x, col);
-      }
-    for (index_t y = r0 + inset; y <= r1 - inset; ++y)
-      if (!dash || on(y - r0)) {
-        put(img, y, c0 + inset, col);
-        put(img, y, c1 - inset, col);
-      }
-  };
-  if (!dashed) {  // the dashed (estimate) box keeps the truth's box visible through its gaps
-    ring(-1, black, false);
-    ring(2, black, false);
-  }
-  ring(0, c, dashed);
-  ring(1, c, dashed);
-}
-
-// A 1 px black frame just outside the rectangle (r0, c0)-(r1, c1).
-void frame(rgb_image& img, index_t r0, index_t c0, index_t r1, index_t c1) {
-  fill(img, r0 - 1, c0 - 1, 1, c1 - c0 + 3, black);
-  fill(img, r1 + 1, c0 - 1, 1, c1 - c0 + 3, black);
-  fill(img, r0 - 1, c0 - 1, r1 - r0 + 3, 1, black);
-  fill(img, r0 - 1, c1 + 1, r1 - r0 + 3, 1, black);
-}
-
-// The truth's marker: a ring of radius `radius` px (the 5 mm success radius: an estimate inside
-// it is "localized"), 2 px thick, with black edges; hollow, so the belief shows inside it.
-void draw_ring(rgb_image& img, index_t row, index_t col, double radius) {
-  const auto reach = static_cast<index_t>(radius) + 3;
-  for (index_t dy = -reach; dy <= reach; ++dy)
-    for (index_t dx = -reach; dx <= reach; ++dx) {
-      const double d = std::hypot(static_cast<double>(dy), static_cast<double>(dx)) - radius;
-      if (d >= -2.0 && d <= 2.0) put(img, row + dy, col + dx, black);
-      if (d >= -1.0 && d <= 1.0) put(img, row + dy, col + dx, truth_colour);
-    }
-}
-
-// The estimate's marker, drawn after (over) the truth's: a "+" reticle with black edges whose
-// arms (from `inner` to `outer` px from the centre) leave the centre open, so that the belief's
-// peak shows, and fit inside the ring, so that both show when the error is 0.
-void draw_cross(rgb_image& img, index_t row, index_t col, index_t inner, index_t outer,
-                index_t half_width) {
-  for (int pass = 0; pass < 2; ++pass) {
-    const colour c = pass == 0 ? black : estimate_colour;
-    const index_t edge = pass == 0 ? 1 : 0;
-    for (index_t d = inner - edge; d <= outer + edge; ++d)
-      for (index_t t = -half_width - edge; t <= half_width - 1 + edge; ++t)
-        for (const index_t sign : {-1, 1}) {
-          put(img, row + sign * d, col + t, c);
-          put(img, row + t, col + sign * d, c);
-        }
-  }
-}
-
-// Horizontal scale bar of `length_mm` at `px_per_mm`, its label to the right.
-void draw_scale_bar(rgb_image& img, index_t top, index_t left, double length_mm, double px_per_mm,
-                    const std::string& label) {
-  const auto w = static_cast<index_t>(std::lround(length_mm * px_per_mm));
-  fill(img, top, left, 6, w, black);
-  fill(img, top - 4, left, 14, 2, black);
-  fill(img, top - 4, left + w - 2, 14, 2, black);
-  draw_text(img, top - 5, left + w + 8, label, 2);
-}
-
-// inferno (matplotlib's perceptually uniform map, sampled at 9 points): dark = improbable.
-colour colour_map(double t) {
-  static const std::array<colour, 9> anchors = {{{0.001F, 0.000F, 0.014F},
-                                                 {0.129F, 0.047F, 0.291F},
-                                                 {0.342F, 0.062F, 0.429F},
-                                                 {0.541F, 0.135F, 0.415F},
-                                                 {0.736F, 0.216F, 0.330F},
-                                                 {0.894F, 0.353F, 0.194F},
-                                                 {0.978F, 0.558F, 0.035F},
-                                                 {0.975F, 0.798F, 0.206F},
-                                                 {0.988F, 0.998F, 0.645F}}};
-  const double x = std::clamp(t, 0.0, 1.0) * 8.0;
-  const auto i = std::min<std::size_t>(7, static_cast<std::size_t>(x));
-  const auto f = static_cast<float>(x - static_cast<double>(i));
-  const colour a = anchors[i], b = anchors[i + 1];
-  return {a.r + f * (b.r - a.r), a.g + f * (b.g - a.g), a.b + f * (b.b - a.b)};
-}
-
-// The belief's colour scale, the same for every panel of both figures: log10 of the
-// probability of a grid cell, from 1e-5 (and below, and outside the grid: black) to 1.
-constexpr double log_p_min = -5.0, log_p_max = 0.0;
-double scale_position(double p) {
-  if (!(p > 0.0)) return 0.0;
-  return (std::log10(p) - log_p_min) / (log_p_max - log_p_min);
-}
-
-// The belief over a panel of `h` x `w` screen px at `zoom` screen px per map px, whose top-left
-// corner shows map px (origin_row, origin_col): the state with top-left (br, bc) is drawn at its
-// window's centre; places no window centre can reach have probability 0 (black); the map's
-// outline in white.
-void draw_belief(rgb_image& img, index_t top, index_t left, index_t h, index_t w,
-                 const tacmap::image<float>& bel, const tacmap::image<std::uint8_t>& edges,
-                 tacmap::pixel_size win, int zoom, double origin_row, double origin_col) {
-  for (index_t r = 0; r < h; ++r)
-    for (index_t c = 0; c < w; ++c) {
-      const auto mr = static_cast<index_t>(std::floor(origin_row + static_cast<double>(r) / zoom));
-      const auto mc = static_cast<index_t>(std::floor(origin_col + static_cast<double>(c) / zoom));
-      const index_t br = mr - win.height / 2, bc = mc - win.width / 2;
-      double p = 0.0;
-      if (br >= 0 && bc >= 0 && br < bel.rows() && bc < bel.cols())
-        p = static_cast<double>(bel(br, bc));
-      colour col = colour_map(scale_position(p));
-      if (mr >= 0 && mc >= 0 && mr < edges.rows() && mc < edges.cols() && edges(mr, mc) != 0) {
-        constexpr float a = 0.45F;
-        col = {(1 - a) * col.r + a, (1 - a) * col.g + a, (1 - a) * col.b + a};
-      }
-      put(img, top + r, left + c, col);
-    }
-}
-
-// The map's outline for the belief panels: where a 3 x 3 box-blurred map crosses its mean.
-tacmap::image<std::uint8_t> outline(const tacmap::image<float>& map) {
-  tacmap::image<float> blur = map;
-  for (index_t r = 0; r < map.rows(); ++r)
-    for (index_t c = 0; c < map.cols(); ++c) {
-      float sum = 0.0F;
-      int n = 0;
-      for (index_t dr = -1; dr <= 1; ++dr)
-        for (index_t dc = -1; dc <= 1; ++dc)
-          if (r + dr >= 0 && c + dc >= 0 && r + dr < map.rows() && c + dc < map.cols()) {
-            sum += map(r + dr, c + dc);
-            ++n;
-          }
-      blur(r, c) = sum / static_cast<float>(n);
-    }
-  const float level = blur.mean();
-  tacmap::image<std::uint8_t> edge = tacmap::image<std::uint8_t>::Zero(map.rows(), map.cols());
-  for (index_t r = 0; r + 1 < map.rows(); ++r)
-    for (index_t c = 0; c + 1 < map.cols(); ++c) {
-      const bool above = blur(r, c) > level;
-      if (above != (blur(r + 1, c) > level) || above != (blur(r, c + 1) > level)) edge(r, c) = 1;
-    }
-  return edge;
-}
-
-std::string fixed(double v, int decimals) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
-
-// The figure is checked as CTest runs the demo: it decodes (stb_image) to the size drawn, and
-// stays under 500 KB, small enough to attach, commit or open anywhere.
-void check_figure(const std::filesystem::path& png, const rgb_image& drawn) {
-  const auto bytes = std::filesystem::file_size(png);
-  if (bytes >= 500U * 1024U)
-    tacmap::detail::fail("gecko_demo: ", png, " is ", bytes / 1024U,
-                         " KB; expected a compressed figure under 500 KB");
-  const tacmap::image<float> back = tacmap::load_image(png);
-  if (back.rows() != drawn.rows() || back.cols() != drawn.cols())
-    tacmap::detail::fail("gecko_demo: ", png, " decodes to ", back.rows(), " x ", back.cols(),
-                         " px; expected the ", drawn.rows(), " x ", drawn.cols(), " px drawn");
-}
 
 struct figure_text {
   std::string title;     // what was localized
@@ -407,24 +130,8 @@ void write_figure(const std::filesystem::path& png, const tacmap::sequence_resul
              {"the same belief,", "zoomed 4x around", "the truth", "white: the map's", "outline"},
              2, line);
   draw_scale_bar(fig, y_zoom + 5 * line + 14, margin, 5.0, zoom / mm, "5 mm");
-  // Colour bar beside the belief labels: 1e-5 (black) to 1, one tick per decade, and the
-  // level of a uniform belief (no information yet), so that a flat belief is read as such.
-  const index_t cb_x = margin + label_w - 86, cb_w = 16;
-  for (index_t r = 0; r < panel_h; ++r) {
-    const double t = 1.0 - static_cast<double>(r) / static_cast<double>(panel_h - 1);
-    fill(fig, y_bel + r, cb_x, 1, cb_w, colour_map(t));
-  }
-  frame(fig, y_bel, cb_x, y_bel + panel_h - 1, cb_x + cb_w - 1);
-  const std::array<const char*, 6> ticks = {"1", "0.1", "0.01", "1e-3", "1e-4", "1e-5"};
-  for (std::size_t k = 0; k < ticks.size(); ++k) {
-    const index_t y = y_bel + static_cast<index_t>(k) * (panel_h - 1) / 5;
-    fill(fig, y, cb_x + cb_w, 1, 5, black);
-    draw_text(fig, y - 8, cb_x + cb_w + 8, ticks[k], 2);
-  }
-  const auto uniform_y =
-      y_bel + static_cast<index_t>(std::lround((1.0 - scale_position(1.0 / cells)) *
-                                               static_cast<double>(panel_h - 1)));
-  fill(fig, uniform_y - 1, cb_x - 10, 3, cb_w + 10, truth_colour);
+  // Colour bar beside the belief labels, with the level of a uniform belief.
+  draw_colour_bar(fig, y_bel, margin + label_w - 86, panel_h, 1.0 / cells);
 
   const tacmap::image<std::uint8_t> edges = outline(map);
   const double ring_radius = std::max(8.0, 5.0 * px_per_mm);  // 5 mm, the success radius
@@ -498,7 +205,7 @@ void write_figure(const std::filesystem::path& png, const tacmap::sequence_resul
 
   draw_lines(fig, y_key, margin, key_lines, 2, line);
   tacmap::write_png_compressed(png, fig);
-  check_figure(png, fig);
+  check_figure("gecko_demo", png, fig);
 }
 
 void print_run(const tacmap::sequence_result& run) {
@@ -519,44 +226,6 @@ void print_run(const tacmap::sequence_result& run) {
     std::printf("error below 5 mm from touch %zu on\n", *ttl);
   else
     std::printf("not localized: the final error is not below 5 mm\n");
-}
-
-// The horse: a photograph of a dark silhouette on white, pressed as a 4 mm relief where the photo
-// is dark; 7 touch locations whose windows hold both horse and background (fixed seed), visited
-// in one order with the gecko protocol's odometry noise (0.5 mm per axis).
-tacmap::touch_protocol horse_protocol() {
-  tacmap::touch_protocol p;
-  p.map_file = std::filesystem::path(TACMAP_DATA_DIR) / "horse" / "horse.pgm";
-  p.map = tacmap::read_pgm(p.map_file);
-  p.mm_per_px = 3.4 / 3.0;
-  p.relief = {.kind = tacmap::relief_kind::binary,
-              .threshold = 0.5F,
-              .height_mm = 4.0,
-              .edge_smoothing_px = 0.7};
-  p.odometry_sigma_mm = 0.5;
-  p.seed = 5;
-  const tacmap::pixel_size window = tacmap::tactile_window({}, p.mm_per_px);
-  const tacmap::planar_grid<float> grid(p.map_size(), p.mm_per_px, window);
-  tacmap::sim_rng rng(p.seed);
-  for (int attempt = 0; p.locations.size() < 7; ++attempt) {
-    if (attempt > 100000)
-      tacmap::detail::fail("gecko_demo: ", p.map_file,
-                           " has too few windows over the "
-                           "horse's edge; expected a silhouette filling part of the image");
-    const auto i = static_cast<Eigen::Index>(rng.below(static_cast<std::uint64_t>(grid.size())));
-    const tacmap::grid_cell cell = grid.cell(i);
-    const float dark_share =
-        (p.map.block(cell.row, cell.col, window.height, window.width) < 0.5F).cast<float>().mean();
-    const auto s = grid.state_mm(i);
-    const tacmap::touch_location loc{s(0), s(1)};
-    if (dark_share > 0.25F && dark_share < 0.75F &&
-        std::find(p.locations.begin(), p.locations.end(), loc) == p.locations.end())
-      p.locations.push_back(loc);
-  }
-  std::vector<std::size_t> order(p.locations.size());
-  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-  p.sequences.push_back(tacmap::sequence_visiting(p.locations, order, p.odometry_sigma_mm, rng));
-  return p;
 }
 
 }  // namespace
@@ -622,7 +291,7 @@ int main(int argc, char** argv) try {
       gecko_png.string().c_str());
 
   // 2. The horse: a dark object on a light background — the same default model, not told.
-  const tacmap::touch_protocol horse = horse_protocol();
+  const tacmap::touch_protocol horse = horse_protocol(TACMAP_DATA_DIR);
   tacmap::localization_config dark = config;
   dark.scenario.polarity = tacmap::relief_polarity::dark_raised;
   tacmap::localization_experiment horse_experiment(horse, dark);
