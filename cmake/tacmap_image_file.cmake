@@ -11,7 +11,8 @@
 if(TARGET tacmap::image_file)
   return()
 endif()
-if(NOT tacmap_image_file_request)
+# Unset or empty only: `if(NOT <var>)` would also take OFF (a false constant) for AUTO.
+if("${tacmap_image_file_request}" STREQUAL "")
   set(tacmap_image_file_request AUTO)
 endif()
 string(TOUPPER "${tacmap_image_file_request}" tacmap_image_file_request)
