@@ -39,6 +39,7 @@
 #include <numbers>
 #include <optional>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "library_evaluation.hpp"
@@ -49,8 +50,14 @@
 #include "tacmap/sim/random.hpp"
 #include "tacmap/sim/scenario.hpp"
 
+// The bundled data: TACMAP_INSTALLED_DATA_DIR is where an install puts it, relative to the
+// installed executable's folder (bin/../share/tacmap/data) or absolute; TACMAP_DATA_DIR is the
+// source tree this tool was built from. tools/CMakeLists.txt defines both.
 #ifndef TACMAP_DATA_DIR
 #define TACMAP_DATA_DIR "data"
+#endif
+#ifndef TACMAP_INSTALLED_DATA_DIR
+#define TACMAP_INSTALLED_DATA_DIR "../share/tacmap/data"
 #endif
 
 namespace {
@@ -78,6 +85,30 @@ std::string csv_number(double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.4f", v);
   return buf;
+}
+
+// The gecko protocol's folder when --gecko is not given: the installed copy beside this
+// executable (so an installed tool works once its source tree is gone), else the source tree's.
+// The first that holds protocol.txt; an error naming every folder tried when none does.
+std::string default_gecko_dir(const char* argv0) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> tried;
+  std::error_code ec;
+  fs::path exe = fs::read_symlink("/proc/self/exe", ec);  // Linux; else argv[0] where it has a path
+  if (ec && argv0 != nullptr && std::string(argv0).find('/') != std::string::npos)
+    exe = fs::absolute(argv0, ec);
+  if (!ec && !exe.empty())
+    tried.push_back((exe.parent_path() / TACMAP_INSTALLED_DATA_DIR / "gecko").lexically_normal());
+  tried.push_back(fs::path(TACMAP_DATA_DIR) / "gecko");
+  std::string names;
+  for (const auto& dir : tried) {
+    if (fs::is_regular_file(dir / "protocol.txt", ec)) return dir.string();
+    names += (names.empty() ? "" : ", ") + (dir / "protocol.txt").string();
+  }
+  throw CLI::ValidationError("--gecko", "no gecko protocol found (tried " + names +
+                                            "); pass --gecko <folder holding protocol.txt>, "
+                                            "e.g. <prefix>/share/tacmap/data/gecko, or --no-gecko "
+                                            "with --photo");
 }
 
 void progress(std::size_t done, std::size_t total, const std::string& label) {
@@ -184,7 +215,7 @@ void print_confidence(const std::map<std::string, confidence_tally>& tallies,
 
 int main(int argc, char** argv) try {
   CLI::App app{"tacmap-evaluate: localization over maps x configurations (paper Sec. IV-B)"};
-  std::string gecko_dir = std::string(TACMAP_DATA_DIR) + "/gecko";
+  std::string gecko_dir;  // empty: default_gecko_dir()
   bool no_gecko = false;
   std::vector<std::string> photos;
   std::vector<std::string> models{"classic_sift"}, pairings{"aligned"}, shapes{"exponential"},
@@ -253,7 +284,10 @@ int main(int argc, char** argv) try {
        1.0,
        {}},
   };
-  app.add_option("--gecko", gecko_dir, "folder of the gecko protocol (protocol.txt)");
+  app.add_option("--gecko", gecko_dir,
+                 "folder of the gecko protocol (protocol.txt); default: the installed data, "
+                 "<executable's folder>/" TACMAP_INSTALLED_DATA_DIR "/gecko, else " TACMAP_DATA_DIR
+                 "/gecko");
   app.add_flag("--no-gecko", no_gecko, "do not evaluate on the gecko");
   app.add_option("--photo", photos, "photograph(s) to use as maps (PNG/JPEG/PGM)")
       ->check(CLI::ExistingFile);
@@ -571,9 +605,12 @@ int main(int argc, char** argv) try {
   }
 
   std::vector<named_map> maps;
-  if (!no_gecko)
+  if (!no_gecko) {
+    if (gecko_dir.empty()) gecko_dir = default_gecko_dir(argc > 0 ? argv[0] : nullptr);
+    std::fprintf(stderr, "gecko: %s\n", gecko_dir.c_str());  // which data a log was made with
     maps.push_back(
         {"gecko", tacmap::load_protocol(std::filesystem::path(gecko_dir) / "protocol.txt")});
+  }
   for (std::size_t i = 0; i < photos.size(); ++i) {
     std::uint64_t s = seed + 0x9E3779B97F4A7C15ULL * (i + 1);
     maps.push_back(

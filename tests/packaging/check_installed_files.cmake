@@ -2,9 +2,9 @@
 #       -DPKG_CONFIG=<pkg-config> -DCXX=<compiler> -DVERSION=<tacmap version>
 #       -DCONSUMER=<a .cpp using tacmap> -DWORK_DIR=<scratch> -P check_installed_files.cmake
 #
-# After `cmake --install`: the tools, the docs (with the session format and its readers), the
-# evaluation plot script, the data, the Find module, and a pkg-config file with which a consumer
-# compiles without CMake.
+# After `cmake --install`: the tools (tacmap-evaluate finding the installed data), the docs (with
+# the session format and its readers), the evaluation plot script, the data, the Find module, and
+# a pkg-config file with which a consumer compiles without CMake.
 set(expected
   "${DOCDIR}/README.md" "${DOCDIR}/LICENSE" "${DOCDIR}/SESSION_FORMAT.md"
   "${DATADIR}/tacmap/plot_evaluation.py" "${DATADIR}/tacmap/data/gecko/protocol.txt"
@@ -34,6 +34,32 @@ foreach(tool IN LISTS TOOLS)
     message(FATAL_ERROR "installed ${tool} --help failed (${status}):\n${out}")
   endif()
 endforeach()
+
+# The installed tacmap-evaluate finds the installed gecko protocol by default (not the source
+# tree it was built from, which still exists here): one short evaluation, one sequence with NCC,
+# must say it used <prefix>/<datadir>/tacmap/data/gecko.
+list(FIND TOOLS tacmap-evaluate evaluate_index)  # (a -P script has no policies: no IN_LIST)
+if(evaluate_index GREATER -1)
+  file(MAKE_DIRECTORY "${WORK_DIR}")
+  execute_process(COMMAND "${PREFIX}/${BINDIR}/tacmap-evaluate" --quiet --sequences 1 --model ncc
+                          --output "${WORK_DIR}/installed_evaluate.csv"
+                  WORKING_DIRECTORY "${WORK_DIR}"
+                  RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT status EQUAL 0)
+    message(FATAL_ERROR "installed tacmap-evaluate --sequences 1 --model ncc failed (${status}):\n"
+                        "${err}\n${out}")
+  endif()
+  # /proc/self/exe has no symbolic links: compare real paths.
+  get_filename_component(installed_gecko "${PREFIX}/${DATADIR}/tacmap/data/gecko" REALPATH)
+  if(NOT err MATCHES "(^|\n)gecko: ([^\n]*)\n")
+    message(FATAL_ERROR "installed tacmap-evaluate did not say which gecko protocol it used:\n${err}")
+  endif()
+  get_filename_component(used_gecko "${CMAKE_MATCH_2}" REALPATH)
+  if(NOT used_gecko STREQUAL installed_gecko)
+    message(FATAL_ERROR "installed tacmap-evaluate used the gecko protocol in ${CMAKE_MATCH_2}; "
+                        "expected the installed one, ${installed_gecko}")
+  endif()
+endif()
 
 # pkg-config, relocated: the prefix is not the one configured.
 if(NOT PKG_CONFIG)
