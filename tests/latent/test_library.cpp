@@ -321,3 +321,32 @@ TEST_CASE("library_likelihood: an evidence exponent raises the objects' Bayes fa
                                                        {.evidence_exponent = 0.0});
         }).find("evidence_exponent = 0") != std::string::npos);
 }
+
+TEST_CASE("library of pose grids: object, position and heading; the heading on the leader") {
+  using pose = tacmap::pose_grid<float>;
+  const pose a(planar({.width = 7, .height = 5}, 2.0, {.width = 3, .height = 2}), 4);
+  const pose b(planar({.width = 8, .height = 4}, 1.0, {.width = 3, .height = 2}), 4);
+  tacmap::bayes_filter f(
+      tacmap::library_grid<pose>({a, b}, {"a", "b"}),
+      tacmap::library_motion(tacmap::pose_odometry_gaussian{}),
+      tacmap::library_likelihood<table_likelihood>(std::vector<table_likelihood>(2)));
+  // Object b, heading layer 1 (90 degrees), state 5 of the layer: e^4 above everything else.
+  Eigen::ArrayXf ll_a = Eigen::ArrayXf::Zero(a.size()), ll_b = Eigen::ArrayXf::Zero(b.size());
+  ll_b(18 + 5) = 4.0F;
+  f.update(std::vector<Eigen::ArrayXf>{ll_a, ll_b});
+  const auto e = f.estimate();
+  CHECK(e.map_object == 1);
+  CHECK(e.map_index == a.size() + 18 + 5);
+  CHECK(e.map_mm(2) == doctest::Approx(b.heading(1)));
+  // The prior is uniform over objects, each object's half spread over its own states (80 in a,
+  // 72 in b), so P(b) = E_b / (E_a + E_b) with E the mean likelihood over the object's states.
+  const double e_a = 1.0;
+  const double e_b =
+      (static_cast<double>(b.size()) - 1.0 + std::exp(4.0)) / static_cast<double>(b.size());
+  CHECK(e.object_probability[1] == doctest::Approx(e_b / (e_a + e_b)).epsilon(1e-5));
+  CHECK(e.object_probability[0] == doctest::Approx(e_a / (e_a + e_b)).epsilon(1e-5));
+  // Joint: object b and the heading within 0.1 rad of 90 degrees (layer 1 alone: 18 states).
+  const double layer_b1 = (18.0 - 1.0 + std::exp(4.0)) / static_cast<double>(b.size());
+  CHECK(f.heading_probability_within(b.heading(1), 0.1) ==
+        doctest::Approx(layer_b1 / (e_a + e_b)).epsilon(1e-5));
+}
