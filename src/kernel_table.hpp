@@ -18,7 +18,9 @@ constexpr precompiled_kernels make_kernels(simd_level level) {
           &distances_each_simd<A, float>,
           &scan_log_likelihood_simd<A, float>,
           &weight_by_likelihood_simd<A, float>,
-          &weighted_sum_simd<A, float>};
+          &weighted_sum_simd<A, float>,
+          &accumulate_sign_pair_tiles_simd<A, float>,
+          &accumulate_distances_tiles_simd<A, float>};
 }
 
 /// The AVX2 + FMA table (src/simd_avx2.cpp, compiled with -mavx2 -mfma).

@@ -87,6 +87,14 @@ struct precompiled_kernels {
   /// Dense SIFT's filters and the motion models' stencils (Eigen, vectorised for the level).
   void (*weighted_sum)(const float* const* sources, const float* weights, std::size_t taps,
                        float* out, Eigen::Index n);
+  /// `accumulate_sign_pair` on a range of tiles (the filter's tracking mode).
+  void (*accumulate_sign_pair_tiles)(const descriptor_tiles<float>& f, const float* g,
+                                     Eigen::Index half, float* plus, float* minus, bool add,
+                                     tile_range tiles);
+  /// `accumulate_distances` on a range of tiles (the filter's tracking mode).
+  void (*accumulate_distances_tiles)(const descriptor_tiles<float>& f, const Eigen::ArrayXXf& g,
+                                     Eigen::Index first, Eigen::Index count, float* out, bool add,
+                                     tile_range range);
 };
 
 // Defined in tacmap::precompiled (src/simd_dispatch.cpp); declared for every translation unit,

@@ -104,6 +104,12 @@ void accumulate_distances_scalar(const descriptor_tiles<T>& f,
   }
 }
 
+/// Tiles [begin, end) of a `descriptor_tiles` (end < 0: to the last tile).
+struct tile_range {
+  Eigen::Index begin = 0;
+  Eigen::Index end = -1;
+};
+
 namespace distance_kernel {
 
 // Registers of architecture A: "register tile" r holds positions [r * width, (r + 1) * width),
@@ -182,7 +188,7 @@ xsimd::batch<T, A> squared_distance(const xsimd::batch<T, A>& dot, const xsimd::
 // the distance stays below ~1e-5), so an exact match is 0.
 template <std::size_t Tiles, std::size_t Count, class A, class T>
 void block(const descriptor_tiles<T>& f, Eigen::Index t0, const xsimd::batch<T, A>* gb, const T* gn,
-           T* out, bool add) {
+           T* out, bool add, Eigen::Index origin) {
   using batch = xsimd::batch<T, A>;
   constexpr Eigen::Index width = register_width<A, T>();
   constexpr Eigen::Index row = descriptor_tiles<T>::width;
@@ -209,7 +215,7 @@ void block(const descriptor_tiles<T>& f, Eigen::Index t0, const xsimd::batch<T, 
       total += xsimd::sqrt(squared_distance(acc[i][j], nf, gn[j], tile[i], dim,
                                             [gj](Eigen::Index k) { return gj[k]; }));
     }
-    store_tile(total, out, first, f.positions(), add);
+    store_tile(total, out, first - origin, f.positions() - origin, add);
   }
 }
 
@@ -221,7 +227,7 @@ using batch_vector =
 
 template <std::size_t Count, class A, class T>
 void tiles(const descriptor_tiles<T>& f, const T* g, Eigen::Index g_stride, batch_vector<A, T>& gb,
-           T* out, bool add) {
+           T* out, bool add, tile_range range) {
   using batch = xsimd::batch<T, A>;
   constexpr std::size_t per_block = Count >= 3 ? 3 : (Count == 2 ? 4 : 8);
   const Eigen::Index dim = f.dimension();
@@ -237,11 +243,18 @@ void tiles(const descriptor_tiles<T>& f, const T* g, Eigen::Index g_stride, batc
       norm += v * v;
     }
   }
-  const Eigen::Index count = register_tiles<A>(f);
-  Eigen::Index t = 0;
+  // `range` counts whole tiles, the kernels registers (`per` to a tile); outputs relative to
+  // the range's first position. Each register's lanes are computed alike wherever the range
+  // starts, so a range's values equal the whole pass's bit for bit (the tracking mode).
+  constexpr Eigen::Index per = descriptor_tiles<T>::width / register_width<A, T>();
+  const Eigen::Index all = register_tiles<A>(f);
+  const Eigen::Index count = range.end < 0 ? all : std::min(range.end * per, all);
+  const Eigen::Index origin = range.begin * descriptor_tiles<T>::width;
+  Eigen::Index t = range.begin * per;
   constexpr auto step = static_cast<Eigen::Index>(per_block);
-  for (; t + step <= count; t += step) block<per_block, Count>(f, t, gb.data(), gn, out, add);
-  for (; t < count; ++t) block<1, Count>(f, t, gb.data(), gn, out, add);
+  for (; t + step <= count; t += step)
+    block<per_block, Count>(f, t, gb.data(), gn, out, add, origin);
+  for (; t < count; ++t) block<1, Count>(f, t, gb.data(), gn, out, add, origin);
 }
 
 }  // namespace distance_kernel
@@ -250,9 +263,10 @@ void tiles(const descriptor_tiles<T>& f, const T* g, Eigen::Index g_stride, batc
 /// to out when `add`, else stored (saves clearing a buffer that is about to be overwritten).
 /// Architecture A's kernel; `accumulate_distances` chooses A.
 template <class A, class T>
-void accumulate_distances_simd(const descriptor_tiles<T>& f,
-                               const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g,
-                               Eigen::Index first, Eigen::Index count, T* out, bool add = true) {
+void accumulate_distances_tiles_simd(const descriptor_tiles<T>& f,
+                                     const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g,
+                                     Eigen::Index first, Eigen::Index count, T* out, bool add,
+                                     tile_range range) {
   const Eigen::Index stride = g.rows();
   // Pre-broadcast tactile descriptors; a few KB, allocated per call (negligible next to the
   // pass over the map's descriptors).
@@ -261,20 +275,28 @@ void accumulate_distances_simd(const descriptor_tiles<T>& f,
     const T* gn = g.data() + n * stride;
     switch (std::min<Eigen::Index>(first + count - n, 3)) {
       case 3:
-        distance_kernel::tiles<3>(f, gn, stride, gb, out, add);
+        distance_kernel::tiles<3>(f, gn, stride, gb, out, add, range);
         n += 3;
         break;
       case 2:
-        distance_kernel::tiles<2>(f, gn, stride, gb, out, add);
+        distance_kernel::tiles<2>(f, gn, stride, gb, out, add, range);
         n += 2;
         break;
       default:
-        distance_kernel::tiles<1>(f, gn, stride, gb, out, add);
+        distance_kernel::tiles<1>(f, gn, stride, gb, out, add, range);
         n += 1;
         break;
     }
     add = true;  // later descriptors add to the first ones' sums
   }
+}
+
+/// Every position: `accumulate_distances_tiles_simd` on all tiles.
+template <class A, class T>
+void accumulate_distances_simd(const descriptor_tiles<T>& f,
+                               const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g,
+                               Eigen::Index first, Eigen::Index count, T* out, bool add = true) {
+  accumulate_distances_tiles_simd<A>(f, g, first, count, out, add, tile_range{});
 }
 
 /// `accumulate_distances_simd` on the compile-time architecture, or (float, with
@@ -292,15 +314,32 @@ void accumulate_distances(const descriptor_tiles<T>& f,
   accumulate_distances_simd<kernel_arch<T>>(f, g, first, count, out, add);
 }
 
+/// `accumulate_distances` on the positions of the tiles `range` only, written relative to its
+/// first position (out[q - range.begin * width]): the whole pass's values there, bit for bit.
+template <class T>
+void accumulate_distances_tiles(const descriptor_tiles<T>& f,
+                                const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& g,
+                                Eigen::Index first, Eigen::Index count, T* out, bool add,
+                                tile_range range) {
+#if defined(TACMAP_PRECOMPILED) && TACMAP_PRECOMPILED
+  if constexpr (std::is_same_v<T, float>) {
+    active_kernels().accumulate_distances_tiles(f, g, first, count, out, add, range);
+    return;
+  }
+#endif
+  accumulate_distances_tiles_simd<kernel_arch<T>>(f, g, first, count, out, add, range);
+}
+
 namespace distance_kernel {
 
 // Tiles consecutive tiles against one descriptor g in a sum/difference basis (elements [0, half):
 // sums S, [half, dim): differences D, see `accumulate_sign_pair`): two accumulators per tile,
 // F_S.g_S and F_D.g_D, give both F.g = S + D and F.g^- = S - D for g^- = (g_S, -g_D). Four tiles
 // keep eight independent FMA chains in flight, like `block`.
+// Outputs are written relative to position `origin` (a tile range's first position).
 template <std::size_t Tiles, class A, class T>
 void pair_block(const descriptor_tiles<T>& f, Eigen::Index t0, const xsimd::batch<T, A>* gb, T gn,
-                Eigen::Index half, T* plus, T* minus, bool add) {
+                Eigen::Index half, T* plus, T* minus, bool add, Eigen::Index origin) {
   using batch = xsimd::batch<T, A>;
   constexpr Eigen::Index width = register_width<A, T>();
   constexpr Eigen::Index row = descriptor_tiles<T>::width;
@@ -327,8 +366,8 @@ void pair_block(const descriptor_tiles<T>& f, Eigen::Index t0, const xsimd::batc
         xsimd::sqrt(squared_distance(sum[i] - diff[i], nf, gn, ti, dim, [gb, half](Eigen::Index k) {
           return k < half ? gb[k] : -gb[k];
         }));
-    store_tile(p, plus, t * width, f.positions(), add);
-    store_tile(m, minus, t * width, f.positions(), add);
+    store_tile(p, plus, t * width - origin, f.positions() - origin, add);
+    store_tile(m, minus, t * width - origin, f.positions() - origin, add);
   }
 }
 
@@ -344,8 +383,8 @@ void pair_block(const descriptor_tiles<T>& f, Eigen::Index t0, const xsimd::batc
 /// the outputs when `add`, else stored. Architecture A's kernel; `accumulate_sign_pair`
 /// chooses A.
 template <class A, class T>
-void accumulate_sign_pair_simd(const descriptor_tiles<T>& f, const T* g, Eigen::Index half, T* plus,
-                               T* minus, bool add) {
+void accumulate_sign_pair_tiles_simd(const descriptor_tiles<T>& f, const T* g, Eigen::Index half,
+                                     T* plus, T* minus, bool add, tile_range tiles) {
   using batch = xsimd::batch<T, A>;
   const Eigen::Index dim = f.dimension();
   TACMAP_ASSERT(half >= 0 && half <= dim, "accumulate_sign_pair: half out of range");
@@ -355,12 +394,26 @@ void accumulate_sign_pair_simd(const descriptor_tiles<T>& f, const T* g, Eigen::
     gb[static_cast<std::size_t>(k)] = batch(g[k]);
     gn += g[k] * g[k];
   }
-  const Eigen::Index count = distance_kernel::register_tiles<A>(f);
-  Eigen::Index t = 0;
+  // `tiles` counts whole tiles (rows of descriptor_tiles<T>::width); the kernels count
+  // registers, `per` to a tile. Every register is computed the same way whatever the range
+  // (its lanes' sums do not depend on their neighbours), so a range's values are bit for bit
+  // those of the whole pass: what the filter's tracking mode relies on.
+  constexpr Eigen::Index per = descriptor_tiles<T>::width / distance_kernel::register_width<A, T>();
+  const Eigen::Index all = distance_kernel::register_tiles<A>(f);
+  const Eigen::Index count = tiles.end < 0 ? all : std::min(tiles.end * per, all);
+  const Eigen::Index origin = tiles.begin * descriptor_tiles<T>::width;
+  Eigen::Index t = tiles.begin * per;
   for (; t + 4 <= count; t += 4)
-    distance_kernel::pair_block<4>(f, t, gb.data(), gn, half, plus, minus, add);
+    distance_kernel::pair_block<4>(f, t, gb.data(), gn, half, plus, minus, add, origin);
   for (; t < count; ++t)
-    distance_kernel::pair_block<1>(f, t, gb.data(), gn, half, plus, minus, add);
+    distance_kernel::pair_block<1>(f, t, gb.data(), gn, half, plus, minus, add, origin);
+}
+
+/// Both signs over every position: `accumulate_sign_pair_tiles_simd` on all tiles.
+template <class A, class T>
+void accumulate_sign_pair_simd(const descriptor_tiles<T>& f, const T* g, Eigen::Index half, T* plus,
+                               T* minus, bool add) {
+  accumulate_sign_pair_tiles_simd<A>(f, g, half, plus, minus, add, tile_range{});
 }
 
 /// `accumulate_sign_pair_simd` on the compile-time architecture, or (float, with
@@ -375,6 +428,20 @@ void accumulate_sign_pair(const descriptor_tiles<T>& f, const T* g, Eigen::Index
   }
 #endif
   accumulate_sign_pair_simd<kernel_arch<T>>(f, g, half, plus, minus, add);
+}
+
+/// `accumulate_sign_pair` on the positions of `tiles` only, written relative to the first of
+/// them (plus[q - tiles.begin * width]): the same values as the whole pass there, bit for bit.
+template <class T>
+void accumulate_sign_pair_tiles(const descriptor_tiles<T>& f, const T* g, Eigen::Index half,
+                                T* plus, T* minus, bool add, tile_range tiles) {
+#if defined(TACMAP_PRECOMPILED) && TACMAP_PRECOMPILED
+  if constexpr (std::is_same_v<T, float>) {
+    active_kernels().accumulate_sign_pair_tiles(f, g, half, plus, minus, add, tiles);
+    return;
+  }
+#endif
+  accumulate_sign_pair_tiles_simd<kernel_arch<T>>(f, g, half, plus, minus, add, tiles);
 }
 
 /// Plain reference of `accumulate_sign_pair`.
@@ -562,12 +629,6 @@ void each_group(const descriptor_tiles<T>& f, Eigen::Index t0,
 }
 
 }  // namespace distance_kernel
-
-/// Tiles [begin, end) of a `descriptor_tiles` (end < 0: to the last tile).
-struct tile_range {
-  Eigen::Index begin = 0;
-  Eigen::Index end = -1;
-};
 
 /// dst[i] += src[i] for i in [0, n), and the sum of src: whole registers into `acc` (reduce it
 /// once after many rows), the last n % width values returned. The pose model's per-row step
