@@ -284,6 +284,49 @@ class configured_measurement {
     std::visit([&](const auto& m) { m.log_likelihood(grid, z, out); }, model_);
   }
 
+  /// Tracking hook (measurement/concept.hpp): the chosen model's bound, +infinity for one
+  /// without the hook (NCC: the filter then always updates the whole grid).
+  [[nodiscard]] double log_likelihood_bound() const {
+    return std::visit(
+        [](const auto& m) -> double {
+          if constexpr (requires { m.log_likelihood_bound(); })
+            return static_cast<double>(m.log_likelihood_bound());
+          else
+            return std::numeric_limits<double>::infinity();
+        },
+        model_);
+  }
+
+  /// Tracking hook: the chosen model's `log_likelihood_on`, or its whole grid.
+  template <class G>
+  void log_likelihood_on(const G& grid, const measurement_type& z, belief_array<G>& out,
+                         std::span<const state_range> states) const {
+    std::visit(
+        [&](const auto& m) {
+          if constexpr (measures_on_states<std::remove_cvref_t<decltype(m)>, G>)
+            m.log_likelihood_on(grid, z, out, states);
+          else
+            m.log_likelihood(grid, z, out);
+        },
+        model_);
+  }
+
+  /// Tracking hook of `log_likelihood_both_signs`: the chosen model's restricted version, or
+  /// the whole grid.
+  template <class G>
+  void log_likelihood_both_signs_on(const G& grid, const measurement_type& z,
+                                    typename G::scalar_type* out,
+                                    std::span<const state_range> states) const {
+    std::visit(
+        [&](const auto& m) {
+          if constexpr (requires { m.log_likelihood_both_signs_on(grid, z, out, states); })
+            m.log_likelihood_both_signs_on(grid, z, out, states);
+          else
+            log_likelihood_both_signs(grid, z, out);
+        },
+        model_);
+  }
+
   /// A touch and its inverted contrast (blocks 0 and 1 of `out`): the model's one-pass version
   /// where it has one, else two calls.
   template <class G>

@@ -21,6 +21,7 @@
 #include "tacmap/angle.hpp"
 #include "tacmap/filter/detail/position_statistics.hpp"
 #include "tacmap/filter/detail/posterior_kernel.hpp"
+#include "tacmap/filter/detail/support.hpp"
 #include "tacmap/filter/state_estimate.hpp"
 #include "tacmap/grid/concept.hpp"
 #include "tacmap/grid/latent_grid.hpp"
@@ -30,6 +31,79 @@
 #include "tacmap/motion/concept.hpp"
 
 namespace tacmap {
+
+/// Which states a measurement update evaluated (`bayes_filter::set_tracking`).
+enum class update_path {
+  full,     ///< the whole grid: tracking off, or the model has no tracking hook or bound
+  tracked,  ///< only the predicted belief's support (all but epsilon of its mass)
+  /// Tracking on, but the support held more than `tracking_params::max_support` of the states
+  /// (a spread belief, e.g. the first touch): the whole grid.
+  full_wide,
+  /// Tracking on, but the touch's evidence inside the support was too weak for the bound
+  /// (rho > `tracking_params::tolerance`: it may fit better outside, e.g. after a kidnap): the
+  /// whole grid.
+  full_contradicted,
+};
+
+[[nodiscard]] inline const char* to_string(update_path p) {
+  switch (p) {
+    case update_path::full:
+      return "full";
+    case update_path::tracked:
+      return "tracked";
+    case update_path::full_wide:
+      return "full (wide support)";
+    case update_path::full_contradicted:
+      return "full (contradicted)";
+  }
+  return "?";
+}
+
+/// Tracking mode of `bayes_filter` (issue 14): once the predicted belief is concentrated, the
+/// likelihood is evaluated only on its support S, the fewest states (up to a threshold's
+/// granularity) holding >= 1 - epsilon of the predicted mass. States outside S are given the
+/// smallest log-likelihood found inside S (any value up to the model's bound would keep the
+/// guarantee; a high one would let the outside gain mass touch after touch). With L the model's
+/// upper bound on the log-likelihood
+/// (`log_likelihood_bound()`), m the mass outside S and Z = sum_{x in S} bel_bar(x) p(z | x),
+///   rho = m exp(L) / Z
+/// bounds what the states outside could have added to the evidence, relative to the inside,
+/// and the total-variation distance between the tracked posterior and the full update's:
+///   TV(tracked, full) <= rho <= tolerance
+/// (both posteriors put mass <= rho outside S and are proportional inside it). When rho exceeds
+/// `tolerance` — the touch fits the prediction so badly that a state outside might explain it
+/// better — the update falls back to the whole grid. The MAP state is always inside S.
+///
+/// What the tracked path cannot give: the likelihood's maximum and the evidence under a
+/// uniform prediction over the whole grid. `update_report::log_likelihood_max` is then the
+/// maximum inside S, `log_evidence` inside S (within log(1 + rho) of the full value), and
+/// `log_prediction_support` an upper bound (the uniform evidence of S alone): a contradiction
+/// is recognised by the fallback, not by that figure. Hence off by default.
+struct tracking_params {
+  /// Mass left outside the support: 0 turns tracking off (the default); else in (0, 0.5). With
+  /// a motion floor (`robust_motion`'s lost_probability) the predicted belief has at least that
+  /// mass spread over every state: a smaller epsilon then selects the whole grid.
+  double epsilon = 0.0;
+  /// The largest bound rho accepted on the tracked path (see above), in (0, 1).
+  double tolerance = 1e-3;
+  /// The whole grid is evaluated when the support holds more than this fraction of the states
+  /// (in (0, 1]): restricting the evaluation would save little.
+  double max_support = 0.25;
+
+  void validate() const {
+    if (!(std::isfinite(epsilon) && epsilon >= 0.0 && epsilon < 0.5))
+      detail::fail("tracking_params: epsilon = ", epsilon,
+                   "; expected the predicted mass left outside the evaluated states, in [0, 0.5) "
+                   "(e.g. 1e-6; 0 turns tracking off)");
+    if (!(std::isfinite(tolerance) && tolerance > 0.0 && tolerance < 1.0))
+      detail::fail("tracking_params: tolerance = ", tolerance,
+                   "; expected the largest accepted bound on the posterior's total-variation "
+                   "error, in (0, 1) (e.g. 1e-3)");
+    if (!(std::isfinite(max_support) && max_support > 0.0 && max_support <= 1.0))
+      detail::fail("tracking_params: max_support = ", max_support,
+                   "; expected a fraction of the states in (0, 1] (e.g. 0.25)");
+  }
+};
 
 /// What one measurement update reports.
 struct update_report {
@@ -54,6 +128,14 @@ struct update_report {
   /// `log_evidence` it needs no reference level: it is a ratio of two evidences of one touch
   /// (`confidence_params::contradiction` in filter/confidence.hpp turns it into a verdict).
   double log_prediction_support = 0.0;
+  /// Which states were evaluated (`bayes_filter::set_tracking`). On the tracked path the three
+  /// figures above are over the evaluated states only (see `tracking_params`).
+  update_path path = update_path::full;
+  /// How many states the likelihood was evaluated at (the grid's size on a full path).
+  Eigen::Index evaluated_states = 0;
+  /// Tracked path: rho, the bound on the total-variation distance between this posterior and
+  /// the full update's (<= `tracking_params::tolerance`); 0 on a full path.
+  double tracking_error_bound = 0.0;
 };
 
 namespace detail {
@@ -143,8 +225,21 @@ class bayes_filter {
   /// off the grid) the exception propagates and the belief is unchanged.
   prediction_report predict(const control_type& u);
 
-  /// Measurement update with measurement `z`, through the measurement model.
+  /// Measurement update with measurement `z`, through the measurement model. With tracking on
+  /// (`set_tracking`) and a model with the tracking hook (measurement/concept.hpp), only the
+  /// predicted belief's support is evaluated when that is exact to the stated tolerance; the
+  /// report's `path` says which ran.
   update_report update(const measurement_type& z);
+
+  /// Turns tracking mode on (epsilon > 0) or off (epsilon = 0): see `tracking_params` for what
+  /// it evaluates and the bound on the error it guarantees. Throws std::invalid_argument for
+  /// parameters out of range (naming the value), the filter unchanged. Models without the
+  /// tracking hook accept it and always update the whole grid.
+  void set_tracking(const tracking_params& params) {
+    params.validate();
+    tracking_ = params;
+  }
+  [[nodiscard]] const tracking_params& tracking() const { return tracking_; }
 
   /// Measurement update with a log-likelihood computed elsewhere: a flat array of `size()`
   /// values, or an image of `rows() x cols()` for single-layer grids.
@@ -327,9 +422,15 @@ class bayes_filter {
     const double log_evidence = std::log(total);
     return {.log_evidence = log_evidence,
             .log_likelihood_max = static_cast<double>(top),
-            .log_prediction_support = log_evidence - std::log(sums.likelihood) +
-                                      std::log(static_cast<double>(ll.size()))};
+            .log_prediction_support =
+                log_evidence - std::log(sums.likelihood) + std::log(static_cast<double>(ll.size())),
+            .evaluated_states = ll.size()};
   }
+
+  // The tracked update (see tracking_params), or the reason it did not run (the caller then
+  // updates the whole grid): update_path::tracked with the report filled, else the fallback.
+  update_path tracked_update(const measurement_type& z, update_report& report);
+  update_report update_full(const measurement_type& z);
 
   // b /= total (b's sum, > 0). When 1 / total overflows the belief's precision (a float sum
   // below ~3e-39: a sharp touch far from where the prediction put its mass) the factor would
@@ -351,6 +452,8 @@ class bayes_filter {
   belief_type belief_;
   belief_type scratch_;
   belief_type log_likelihood_;
+  tracking_params tracking_;
+  std::vector<state_range> support_;  // tracking: the states evaluated
   // Position statistics (coordinates cached once): one per object for library grids.
   std::vector<statistics_type> stats_;
 };
@@ -396,6 +499,113 @@ prediction_report bayes_filter<Grid, Motion, Measurement>::predict(const control
 
 template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
 update_report bayes_filter<Grid, Motion, Measurement>::update(const measurement_type& z) {
+  update_path fallback = update_path::full;
+  if constexpr (measures_on_states<Measurement, Grid> &&
+                !detail::measures_given_prediction<Measurement, Grid>) {
+    if (tracking_.epsilon > 0.0) {
+      update_report report;
+      fallback = tracked_update(z, report);
+      if (fallback == update_path::tracked) return report;
+    }
+  }
+  update_report report = update_full(z);
+  report.path = fallback;
+  return report;
+}
+
+template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
+update_path bayes_filter<Grid, Motion, Measurement>::tracked_update(const measurement_type& z,
+                                                                    update_report& report) {
+  // Whole-class instantiations (explicit, or extern in tacmap::precompiled) compile this for
+  // models without the hook too: it is never called for them.
+  if constexpr (!measures_on_states<Measurement, Grid>) {
+    (void)z;
+    (void)report;
+    return update_path::full;
+  } else {
+    const double bound = static_cast<double>(measurement_.log_likelihood_bound());
+    if (!(bound < std::numeric_limits<double>::infinity())) return update_path::full;
+    const Eigen::Index n = grid_.size();
+    // The support S = {p >= t}: one pass for every candidate threshold's mass below it, one for
+    // the ranges (no sort).
+    const scalar_type t = detail::support_threshold(belief_.data(), n, tracking_.epsilon);
+    const auto max_states =
+        static_cast<Eigen::Index>(tracking_.max_support * static_cast<double>(n));
+    const detail::support_summary s =
+        detail::support_ranges(belief_.data(), n, t, max_states, support_);
+    if (s.too_wide) return update_path::full_wide;
+    const std::span<const state_range> in(support_);
+    measurement_.log_likelihood_on(grid_, z, log_likelihood_, in);
+    // The NaN and +infinity guards of apply_log_likelihood, on the states evaluated.
+    scalar_type top = -std::numeric_limits<scalar_type>::infinity();
+    for (const state_range& r : in) {
+      const auto scan =
+          detail::scan_log_likelihood(log_likelihood_.data() + r.begin, r.end - r.begin);
+      if (scan.first_nan >= 0)
+        detail::fail<std::domain_error>(
+            "bayes_filter::update: the measurement model is NaN at state ",
+            r.begin + scan.first_nan,
+            "; expected finite log-likelihoods (or -infinity for "
+            "excluded states). The belief is unchanged");
+      top = std::max(top, scan.max);
+    }
+    if (top == std::numeric_limits<scalar_type>::infinity())
+      detail::fail<std::domain_error>(
+          "bayes_filter::update: the measurement model contains "
+          "+infinity; expected finite log-likelihoods. The belief is "
+          "unchanged");
+    // Every state of S excluded: the whole grid decides (and reports it if all are).
+    if (top == -std::numeric_limits<scalar_type>::infinity()) return update_path::full_contradicted;
+    // Z (relative to exp(top)) and the inside's uniform evidence; scratch_ = bel_bar * exp(ll -
+    // top) on S.
+    detail::weight_sums sums;
+    for (const state_range& r : in) {
+      const detail::weight_sums w =
+          detail::weight_by_likelihood(belief_.data() + r.begin, log_likelihood_.data() + r.begin,
+                                       top, scratch_.data() + r.begin, r.end - r.begin);
+      sums.posterior += w.posterior;
+      sums.likelihood += w.likelihood;
+    }
+    // rho = m exp(L) / Z, with Z = exp(top) * sums.posterior; in logs (exp(L - top) may
+    // overflow). The outside's mass is inflated by 1e-5 for its float summation.
+    const double outside = s.outside * (1.0 + 1e-5);
+    const double rho = outside > 0.0
+                           ? std::exp(std::log(outside) + (bound - static_cast<double>(top)) -
+                                      std::log(sums.posterior))
+                           : 0.0;
+    if (!(sums.posterior > 0.0 && std::isfinite(sums.posterior)) || !(rho <= tracking_.tolerance))
+      return update_path::full_contradicted;
+    // Outside S: the smallest log-likelihood found inside S. Any value up to the bound keeps
+    // TV <= rho; this one keeps the outside's mass from growing touch after touch (with the
+    // best value found, the states just outside would gain on the inside's tails at every touch
+    // until the support spread over the grid), and positive where the prediction was.
+    scalar_type low = top;
+    for (const state_range& r : in)
+      low = std::min(low, log_likelihood_.segment(r.begin, r.end - r.begin).minCoeff());
+    const double outside_factor = std::exp(static_cast<double>(low) - static_cast<double>(top));
+    const double total = sums.posterior + s.outside * outside_factor;
+    const double inverse = 1.0 / total;
+    if (!(inverse < static_cast<double>(std::numeric_limits<scalar_type>::max())))
+      return update_path::full_contradicted;  // the normaliser would overflow: let the full path
+    const auto scale = static_cast<scalar_type>(inverse);
+    belief_ *= static_cast<scalar_type>(outside_factor * inverse);
+    for (const state_range& r : in)
+      belief_.segment(r.begin, r.end - r.begin) =
+          scratch_.segment(r.begin, r.end - r.begin) * scale;
+    const double log_evidence = std::log(sums.posterior);
+    report = {.log_evidence = log_evidence,
+              .log_likelihood_max = static_cast<double>(top),
+              .log_prediction_support =
+                  log_evidence - std::log(sums.likelihood) + std::log(static_cast<double>(n)),
+              .path = update_path::tracked,
+              .evaluated_states = s.states,
+              .tracking_error_bound = rho};
+    return update_path::tracked;
+  }
+}
+
+template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
+update_report bayes_filter<Grid, Motion, Measurement>::update_full(const measurement_type& z) {
   if constexpr (detail::measures_given_prediction<Measurement, Grid>)
     measurement_.log_likelihood(grid_, z, log_likelihood_, std::as_const(belief_));
   else

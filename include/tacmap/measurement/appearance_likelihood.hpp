@@ -45,6 +45,7 @@
 #include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/measurement/concept.hpp"
+#include "tacmap/measurement/detail/state_ranges.hpp"
 
 namespace tacmap {
 
@@ -139,18 +140,7 @@ class appearance_likelihood {
   requires measurement_model<Model, typename G::base_type> &&
       std::same_as<typename Model::measurement_type, image<float>>
   void log_likelihood(const G& grid, const measurement_type& z, belief_array<G>& out) const {
-    if (grid.hypotheses() != static_cast<Eigen::Index>(hypotheses_.size()))
-      detail::fail("appearance_likelihood: the grid has ", grid.hypotheses(),
-                   " hypotheses but the model ", hypotheses_.size(),
-                   "; expected one grid hypothesis per appearance — build the latent_grid with "
-                   "the model's hypothesis_names()");
-    for (std::size_t h = 0; h < hypotheses_.size(); ++h)
-      if (grid.hypothesis_name(static_cast<Eigen::Index>(h)) != to_string(hypotheses_[h]))
-        detail::fail("appearance_likelihood: the grid's hypothesis ", h, " is named '",
-                     grid.hypothesis_name(static_cast<Eigen::Index>(h)), "' but the model's is '",
-                     to_string(hypotheses_[h]),
-                     "'; expected the same order — build the latent_grid with the model's "
-                     "hypothesis_names()");
+    check_hypotheses(grid);
     const Eigen::Index n = grid.hypothesis_size();
     // One hypothesis as photographed: the model itself, straight into the belief's buffer.
     if (hypotheses_.size() == 1 && hypotheses_[0] == appearance::as_photographed) {
@@ -158,8 +148,7 @@ class appearance_likelihood {
       return;
     }
     if constexpr (measures_both_signs<Model, typename G::base_type>) {
-      if (hypotheses_.size() == 2 && hypotheses_[0] == appearance::as_photographed &&
-          hypotheses_[1] == appearance::inverted) {
+      if (both_signs_order()) {
         model_.log_likelihood_both_signs(grid.base(), z, out.data());
         return;
       }
@@ -185,7 +174,87 @@ class appearance_likelihood {
     }
   }
 
+  /// Tracking hook (measurement/concept.hpp), when `Model` has one: its bound.
+  [[nodiscard]] double log_likelihood_bound() const requires requires(const Model& m) {
+    m.log_likelihood_bound();
+  }
+  { return static_cast<double>(model_.log_likelihood_bound()); }
+
+  /// Tracking hook: `log_likelihood` at (at least) the latent states of `states`, bit for bit.
+  /// Both signs in one pass (the localizer's default): the base states any hypothesis needs,
+  /// scored for both at once; a model scoring several images in one pass otherwise: the whole
+  /// grid (its shared pass is what `log_likelihood` runs, exact only whole); else each
+  /// hypothesis's own states through the model's hook.
+  template <latent_state_grid G>
+  requires measures_on_states<Model, typename G::base_type> &&
+      std::same_as<typename Model::measurement_type, image<float>>
+  void log_likelihood_on(const G& grid, const measurement_type& z, belief_array<G>& out,
+                         std::span<const state_range> states) const {
+    check_hypotheses(grid);
+    const Eigen::Index n = grid.hypothesis_size();
+    if (hypotheses_.size() == 1 && hypotheses_[0] == appearance::as_photographed) {
+      model_.log_likelihood_on(grid.base(), z, out, states);
+      return;
+    }
+    if constexpr (measures_both_signs<Model, typename G::base_type>) {
+      if (both_signs_order()) {
+        if constexpr (requires(const Model& m, const typename G::base_type& b,
+                               const measurement_type& zz, typename G::scalar_type* o,
+                               std::span<const state_range> st) {
+                        m.log_likelihood_both_signs_on(b, zz, o, st);
+                      }) {
+          detail::project_to_block(states, n, base_ranges_);
+          model_.log_likelihood_both_signs_on(grid.base(), z, out.data(),
+                                              std::span<const state_range>(base_ranges_));
+        } else {
+          model_.log_likelihood_both_signs(grid.base(), z, out.data());
+        }
+        return;
+      }
+    }
+    if constexpr (measures_each<Model, typename G::base_type>) {
+      log_likelihood(grid, z, out);
+      return;
+    }
+    auto& block = scratch<typename G::scalar_type>();
+    block.resize(n);
+    for (std::size_t h = 0; h < hypotheses_.size(); ++h) {
+      const auto offset = static_cast<Eigen::Index>(h) * n;
+      detail::block_ranges(states, static_cast<Eigen::Index>(h), n, base_ranges_);
+      if (base_ranges_.empty()) continue;
+      const std::span<const state_range> mine(base_ranges_);
+      if (hypotheses_[h] == appearance::as_photographed)
+        model_.log_likelihood_on(grid.base(), z, block, mine);
+      else
+        model_.log_likelihood_on(grid.base(), appearance_transform(z, hypotheses_[h]), block, mine);
+      for (const state_range& r : mine)
+        out.segment(offset + r.begin, r.end - r.begin) = block.segment(r.begin, r.end - r.begin);
+    }
+  }
+
  private:
+  // The two hypotheses in the order log_likelihood_both_signs fills them.
+  [[nodiscard]] bool both_signs_order() const {
+    return hypotheses_.size() == 2 && hypotheses_[0] == appearance::as_photographed &&
+           hypotheses_[1] == appearance::inverted;
+  }
+
+  template <latent_state_grid G>
+  void check_hypotheses(const G& grid) const {
+    if (grid.hypotheses() != static_cast<Eigen::Index>(hypotheses_.size()))
+      detail::fail("appearance_likelihood: the grid has ", grid.hypotheses(),
+                   " hypotheses but the model ", hypotheses_.size(),
+                   "; expected one grid hypothesis per appearance — build the latent_grid with "
+                   "the model's hypothesis_names()");
+    for (std::size_t h = 0; h < hypotheses_.size(); ++h)
+      if (grid.hypothesis_name(static_cast<Eigen::Index>(h)) != to_string(hypotheses_[h]))
+        detail::fail("appearance_likelihood: the grid's hypothesis ", h, " is named '",
+                     grid.hypothesis_name(static_cast<Eigen::Index>(h)), "' but the model's is '",
+                     to_string(hypotheses_[h]),
+                     "'; expected the same order — build the latent_grid with the model's "
+                     "hypothesis_names()");
+  }
+
   template <class T>
   Eigen::Array<T, Eigen::Dynamic, 1>& scratch() const {
     if constexpr (std::is_same_v<T, float>)
@@ -199,7 +268,8 @@ class appearance_likelihood {
   // One block of log-likelihoods, kept between calls: one object is not reentrant.
   mutable Eigen::ArrayXf scratch_f_;
   mutable Eigen::ArrayXd scratch_d_;
-  mutable std::vector<image<float>> images_;  // each hypothesis's view of the touch
+  mutable std::vector<image<float>> images_;      // each hypothesis's view of the touch
+  mutable std::vector<state_range> base_ranges_;  // log_likelihood_on: the base grid's states
 };
 
 }  // namespace tacmap

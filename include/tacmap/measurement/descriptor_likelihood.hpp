@@ -45,6 +45,7 @@
 #include "tacmap/image.hpp"
 #include "tacmap/measurement/concept.hpp"
 #include "tacmap/measurement/detail/distance_kernel.hpp"
+#include "tacmap/measurement/detail/state_ranges.hpp"
 
 namespace tacmap {
 
@@ -379,6 +380,84 @@ class descriptor_likelihood {
     to_log_likelihood(out);
   }
 
+  /// Tracking hook (measurement/concept.hpp): an upper bound on log p(z | x) for every state and
+  /// touch. Distances are >= 0, so the exponential shape's -tempering d / tau is <= 0 and eq.
+  /// (2)'s -tempering log(d + epsilon) <= -tempering log(epsilon) (returned a hair higher, so
+  /// that the float logarithm of the model itself cannot exceed it).
+  [[nodiscard]] double log_likelihood_bound() const {
+    if (params_.shape == likelihood_shape::exponential) return 0.0;
+    const double b = -params_.tempering * std::log(params_.epsilon);
+    return b + 1e-5 * (1.0 + std::abs(b));
+  }
+
+  /// Tracking hook: log p(z | x) at (at least) the states of `states` (sorted, disjoint ranges),
+  /// bit for bit what `log_likelihood` writes there; other entries unspecified. Per-window
+  /// features with contrast as_is (the default) stream only the tiles of window descriptors
+  /// that hold those states (8 windows a tile); shared dense features and either_per_patch
+  /// compute the whole grid (exact, no saving).
+  template <class G>
+  void log_likelihood_on(const G& grid, const measurement_type& z, belief_array<G>& out,
+                         std::span<const state_range> states)
+      const requires std::same_as<typename G::scalar_type, scalar_type> {
+    if (params_.features != window_features::per_window ||
+        params_.contrast != contrast_sign::as_is) {
+      log_likelihood(grid, z, out);
+      return;
+    }
+    check_grid(grid);
+    const descriptor_matrix g = in_stored_basis(tactile_descriptors(z));
+    constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
+    detail::covering_tiles(states, width, grid.size(), tile_ranges_);
+    for (const detail::tile_range& t : tile_ranges_) {
+      // As per_window_distances, on these tiles only: the same kernel, register by register.
+      scalar_type* o = out.data() + t.begin * width;
+      for (Eigen::Index m = 0; m < patches_per_window(); ++m) {
+        const auto& f = per_window_[static_cast<std::size_t>(m)];
+        if (params_.pairs == pairing::all_pairs)
+          accumulate_on(f, g, 0, g.cols(), o, m > 0, t);
+        else
+          accumulate_on(f, g, m, 1, o, m > 0, t);
+      }
+      const state_range p = detail::tile_positions(t, width, grid.size());
+      to_log_likelihood(out.segment(p.begin, p.end - p.begin));
+    }
+  }
+
+  /// Tracking hook of `log_likelihood_both_signs`: blocks 0 and 1 of `out` at (at least) the
+  /// states of `states` (ranges of one block, [0, grid.size())), bit for bit. The one-pass
+  /// both_signs layout with per-window features and the exponential shape streams only the
+  /// tiles that hold those states; otherwise the whole grid (exact, no saving).
+  template <class G>
+  void log_likelihood_both_signs_on(const G& grid, const measurement_type& z, scalar_type* out,
+                                    std::span<const state_range> states)
+      const requires std::same_as<typename G::scalar_type, scalar_type> {
+    // The inverse shape's vectorised logarithm splits a block that does not start on a packet
+    // boundary (block 1) differently than a range of it: the whole grid keeps it exact.
+    if (!params_.both_signs || params_.features != window_features::per_window ||
+        params_.shape != likelihood_shape::exponential) {
+      log_likelihood_both_signs(grid, z, out);
+      return;
+    }
+    detail::check_tactile_image("descriptor_likelihood", z, window_);
+    check_grid(grid);
+    const Eigen::Index n = grid.size();
+    const descriptor_matrix g = in_stored_basis(tactile_descriptors(z));
+    const Eigen::Index half = basis_.half();
+    constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
+    detail::covering_tiles(states, width, n, tile_ranges_);
+    for (const detail::tile_range& t : tile_ranges_) {
+      scalar_type* plus = out + t.begin * width;
+      scalar_type* minus = out + n + t.begin * width;
+      for (Eigen::Index m = 0; m < patches_per_window(); ++m)
+        detail::accumulate_sign_pair_tiles(per_window_[static_cast<std::size_t>(m)], &g(0, m), half,
+                                           plus, minus, m > 0, t);
+      const state_range p = detail::tile_positions(t, width, n);
+      for (Eigen::Index sign = 0; sign < 2; ++sign)
+        to_log_likelihood(Eigen::Map<Eigen::Array<scalar_type, Eigen::Dynamic, 1>>(
+            out + sign * n + p.begin, p.end - p.begin));
+    }
+  }
+
  private:
   // Descriptors as columns, in the basis the map's descriptors are stored in: the contrast
   // basis with both_signs, else as they are.
@@ -421,6 +500,26 @@ class descriptor_likelihood {
         if (!add) out[q] = 0;
         for (Eigen::Index n = first; n < first + count; ++n)
           out[q] += descriptor_.distance(column, g.col(n));
+      }
+    }
+  }
+
+  // `accumulate` on the tiles `t` only, `out` pointing at their first position.
+  void accumulate_on(const detail::descriptor_tiles<scalar_type>& f, const descriptor_matrix& g,
+                     Eigen::Index first, Eigen::Index count, scalar_type* out, bool add,
+                     const detail::tile_range& t) const {
+    if constexpr (euclidean_descriptor<Descriptor>) {
+      detail::accumulate_distances_tiles(f, g, first, count, out, add, t);
+    } else {
+      constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
+      const state_range p = detail::tile_positions(t, width, f.positions());
+      Eigen::Array<scalar_type, Eigen::Dynamic, 1> column(f.dimension());
+      for (Eigen::Index q = p.begin; q < p.end; ++q) {
+        for (Eigen::Index k = 0; k < f.dimension(); ++k) column(k) = f.at(q, k);
+        scalar_type& o = out[q - p.begin];
+        if (!add) o = 0;
+        for (Eigen::Index n = first; n < first + count; ++n)
+          o += descriptor_.distance(column, g.col(n));
       }
     }
   }
@@ -541,6 +640,7 @@ class descriptor_likelihood {
   mutable descriptor_matrix signs_;
   mutable descriptor_matrix patch_columns_;  // log_likelihood_each: patch m of every image
   detail::contrast_basis basis_;  // both_signs: the basis the map's descriptors are stored in
+  mutable std::vector<detail::tile_range> tile_ranges_;  // log_likelihood_on: tiles to stream
 };
 
 // The heavy members, defined out of the class: not inline, so that where tacmap::precompiled

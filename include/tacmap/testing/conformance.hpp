@@ -28,12 +28,14 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <stdexcept>
 #include <vector>
 
 #include "tacmap/descriptor/concept.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/grid/planar_grid.hpp"
+#include "tacmap/measurement/concept.hpp"
 #include "tacmap/measurement/descriptor_likelihood.hpp"
 #include "tacmap/motion/odometry_gaussian.hpp"
 
@@ -198,3 +200,50 @@ TEST_CASE_TEMPLATE_DEFINE("tacmap descriptor conformance", D, tacmap_descriptor_
     CHECK((e.map_mm - grid.state_mm(grid.index(truth))).norm() < 5.0);
   }
 }
+
+namespace tacmap::testing {
+
+/// Checks the tracking hook of a measurement model (measurement/concept.hpp) on `grid` and the
+/// measurement `z`: `log_likelihood_bound()` is at least every value `log_likelihood` writes, and
+/// `log_likelihood_on` writes exactly (bit for bit) those values at the states of several range
+/// patterns — single states, a run across tiles, the grid's first and last states, every state.
+/// Call it from a doctest test case with your model (any model satisfying `measures_on_states`).
+template <class Model, class Grid>
+void check_log_likelihood_on(const Model& model, const Grid& grid,
+                             const typename Model::measurement_type& z) {
+  static_assert(measures_on_states<Model, Grid>,
+                "check_log_likelihood_on: the model has no tracking hook (log_likelihood_bound and "
+                "log_likelihood_on, see tacmap/measurement/concept.hpp)");
+  using scalar = typename Grid::scalar_type;
+  const Eigen::Index n = grid.size();
+  belief_array<Grid> full(n);
+  model.log_likelihood(grid, z, full);
+  const double bound = static_cast<double>(model.log_likelihood_bound());
+  CHECK_MESSAGE(static_cast<double>(full.maxCoeff()) <= bound,
+                "log_likelihood_bound() = " << bound << " is below a value of log_likelihood, "
+                                            << full.maxCoeff());
+  std::vector<std::vector<state_range>> patterns;
+  patterns.push_back({{0, 1}});
+  patterns.push_back({{n - 1, n}});
+  patterns.push_back(
+      {{0, std::min<Eigen::Index>(3, n)}, {std::min<Eigen::Index>(n / 2, n - 1), n}});
+  if (n > 40) patterns.push_back({{5, 6}, {7, 29}, {30, 31}, {n - 9, n - 2}});
+  patterns.push_back({{0, n}});
+  for (const auto& states : patterns) {
+    belief_array<Grid> out =
+        belief_array<Grid>::Constant(n, std::numeric_limits<scalar>::quiet_NaN());
+    model.log_likelihood_on(grid, z, out, std::span<const state_range>(states));
+    for (const state_range& r : states)
+      for (Eigen::Index i = r.begin; i < r.end; ++i) {
+        // Bit for bit: the same value, or both NaN (which the filter rejects either way).
+        const bool same = out(i) == full(i) || (std::isnan(out(i)) && std::isnan(full(i)));
+        if (!same) {
+          FAIL_CHECK("log_likelihood_on at state " << i << " wrote " << out(i)
+                                                   << " where log_likelihood wrote " << full(i));
+          return;
+        }
+      }
+  }
+}
+
+}  // namespace tacmap::testing

@@ -1,0 +1,176 @@
+// Tracking mode (issue 14, item 3): the first touch (whole grid) and a touch once localized,
+// tracked and full, on a camera-resolution map. The map is 160 x 120 px unless
+// TACMAP_BENCH_MAP=<cols>x<rows> (e.g. 640x480) is set: the smoke run under CTest stays cheap,
+// since preparing 640 x 480 for the default model takes seconds and ~420 MB per filter.
+//
+//   TACMAP_BENCH_MAP=640x480 build/release/bench/tacmap_tracking_bench --benchmark_repetitions=5
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+
+#include "bench_maps.hpp"
+#include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/grid/planar_grid.hpp"
+#include "tacmap/localizer.hpp"
+#include "tacmap/measurement/descriptor_likelihood.hpp"
+#include "tacmap/motion/odometry_gaussian.hpp"
+
+namespace {
+
+constexpr double mm_per_px = 0.2;
+constexpr tacmap::pixel_size window{.width = 18, .height = 42};
+
+const tacmap::image<float>& map() {
+  static const tacmap::image<float> m = [] {
+    Eigen::Index cols = 160, rows = 120;
+    if (const char* env = std::getenv("TACMAP_BENCH_MAP")) {
+      long c = 0, r = 0;
+      if (std::sscanf(env, "%ldx%ld", &c, &r) == 2 && c >= 60 && r >= 60) {
+        cols = c;
+        rows = r;
+      }
+    }
+    return tacmap_bench::bench_map(rows, cols);
+  }();
+  return m;
+}
+
+// The window `dc` px right of the map's centre.
+tacmap::image<float> cut(Eigen::Index dc = 0) {
+  return map().block(map().rows() / 2 - window.height / 2, map().cols() / 2 + dc, window.height,
+                     window.width);
+}
+
+// The default descriptor model (classic_sift, per window, aligned, exponential) in the plane.
+using plain_filter = tacmap::bayes_filter<tacmap::planar_grid<float>, tacmap::odometry_gaussian,
+                                          tacmap::descriptor_likelihood<tacmap::classic_sift>>;
+
+plain_filter& plain() {
+  static std::unique_ptr<plain_filter> f = [] {
+    const tacmap::planar_grid<float> grid({.width = map().cols(), .height = map().rows()},
+                                          mm_per_px, window);
+    return std::make_unique<plain_filter>(
+        grid, tacmap::odometry_gaussian({.sigma_mm = 1.0, .k = 8}),
+        tacmap::descriptor_likelihood<tacmap::classic_sift>(tacmap::classic_sift{}, map(), window));
+  }();
+  return *f;
+}
+
+// The localizer's filter (latent appearance, both signs in one pass), with the default motion
+// (floor and wide component) or without them (`floor` false): tracking needs a concentrated
+// prediction, which the floor's lost_probability spread over every state is not.
+tacmap::planar_localizer_filter& latent(bool floor) {
+  static std::unique_ptr<tacmap::planar_localizer_filter> with, without;
+  auto& f = floor ? with : without;
+  if (!f) {
+    tacmap::localizer_config config;
+    if (!floor) {
+      config.lost_probability = 0.0;
+      config.wide_probability = 0.0;
+    }
+    f = std::make_unique<tacmap::planar_localizer_filter>(
+        tacmap::make_planar_filter(config, map(), mm_per_px, window));
+  }
+  return *f;
+}
+
+// Localized: three full updates at the touch position.
+template <class Filter>
+void localize(Filter& f) {
+  f.set_tracking({});
+  f.reset();
+  for (int k = 0; k < 3; ++k) f.update(cut());
+}
+
+template <class Filter>
+void first_touch(benchmark::State& state, Filter& f) {
+  f.set_tracking({});
+  const auto z = cut();
+  for (auto _ : state) {
+    state.PauseTiming();
+    f.reset();
+    state.ResumeTiming();
+    f.update(z);
+    benchmark::DoNotOptimize(f.belief().data());
+  }
+  state.counters["states"] = static_cast<double>(f.grid().size());
+}
+
+// A touch once localized: predict 4 px right or back, update with the window there.
+template <class Filter>
+void localized_touch(benchmark::State& state, Filter& f, bool tracking) {
+  localize(f);
+  if (tracking) f.set_tracking({.epsilon = 1e-6});
+  const auto a = cut(), b = cut(4);
+  const tacmap::odometry there{.dx_mm = 4 * mm_per_px}, back{.dx_mm = -4 * mm_per_px};
+  bool at_a = true;
+  double evaluated = 0.0, tracked = 0.0, touches = 0.0;
+  for (auto _ : state) {
+    f.predict(at_a ? there : back);
+    const tacmap::update_report r = f.update(at_a ? b : a);
+    at_a = !at_a;
+    evaluated += static_cast<double>(r.evaluated_states);
+    tracked += r.path == tacmap::update_path::tracked ? 1.0 : 0.0;
+    touches += 1.0;
+    benchmark::DoNotOptimize(f.belief().data());
+  }
+  state.counters["evaluated"] = evaluated / touches;
+  state.counters["tracked"] = tracked / touches;
+  f.set_tracking({});
+}
+
+// The parts of a tracked touch: predict alone (whole grid), update alone.
+template <class Filter>
+void localized_part(benchmark::State& state, Filter& f, bool update_only) {
+  localize(f);
+  f.set_tracking({.epsilon = 1e-6});
+  const auto a = cut(), b = cut(4);
+  const tacmap::odometry there{.dx_mm = 4 * mm_per_px}, back{.dx_mm = -4 * mm_per_px};
+  bool at_a = true;
+  for (auto _ : state) {
+    if (update_only) state.PauseTiming();
+    f.predict(at_a ? there : back);
+    if (update_only) {
+      state.ResumeTiming();
+      f.update(at_a ? b : a);
+    } else {
+      state.PauseTiming();
+      f.update(at_a ? b : a);
+      state.ResumeTiming();
+    }
+    at_a = !at_a;
+    benchmark::DoNotOptimize(f.belief().data());
+  }
+  f.set_tracking({});
+}
+
+void plain_first_touch(benchmark::State& state) { first_touch(state, plain()); }
+void plain_predict(benchmark::State& state) { localized_part(state, plain(), false); }
+void plain_update_tracked(benchmark::State& state) { localized_part(state, plain(), true); }
+void plain_touch_full(benchmark::State& state) { localized_touch(state, plain(), false); }
+void plain_touch_tracked(benchmark::State& state) { localized_touch(state, plain(), true); }
+void latent_first_touch(benchmark::State& state) { first_touch(state, latent(false)); }
+void latent_touch_full(benchmark::State& state) { localized_touch(state, latent(false), false); }
+void latent_touch_tracked(benchmark::State& state) { localized_touch(state, latent(false), true); }
+void default_filter_touch_full(benchmark::State& state) {
+  localized_touch(state, latent(true), false);
+}
+void default_filter_touch_tracking_on(benchmark::State& state) {
+  localized_touch(state, latent(true), true);
+}
+
+}  // namespace
+
+BENCHMARK(plain_first_touch)->Unit(benchmark::kMillisecond);
+BENCHMARK(plain_touch_full)->Unit(benchmark::kMicrosecond);
+BENCHMARK(plain_touch_tracked)->Unit(benchmark::kMicrosecond);
+BENCHMARK(plain_predict)->Unit(benchmark::kMicrosecond);
+BENCHMARK(plain_update_tracked)->Unit(benchmark::kMicrosecond);
+BENCHMARK(latent_first_touch)->Unit(benchmark::kMillisecond);
+BENCHMARK(latent_touch_full)->Unit(benchmark::kMicrosecond);
+BENCHMARK(latent_touch_tracked)->Unit(benchmark::kMicrosecond);
+BENCHMARK(default_filter_touch_full)->Unit(benchmark::kMicrosecond);
+BENCHMARK(default_filter_touch_tracking_on)->Unit(benchmark::kMicrosecond);

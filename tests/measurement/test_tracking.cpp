@@ -1,0 +1,356 @@
+// Tracking mode (issue 14, item 3): the measurement models' hook against their full
+// log-likelihood, and the filter's tracked update against its full update.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <limits>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/grid/planar_grid.hpp"
+#include "tacmap/localizer.hpp"
+#include "tacmap/measurement/appearance_likelihood.hpp"
+#include "tacmap/measurement/descriptor_likelihood.hpp"
+#include "tacmap/measurement/ncc_likelihood.hpp"
+#include "tacmap/motion/odometry_gaussian.hpp"
+#include "tacmap/testing/conformance.hpp"
+#include "test_support.hpp"
+
+using grid_t = tacmap::planar_grid<float>;
+using tacmap::state_range;
+using tacmap::update_path;
+
+namespace {
+
+constexpr double mm_per_px = 0.2;
+constexpr tacmap::pixel_size window{.width = 18, .height = 42};
+
+const tacmap::image<float>& test_map() {
+  static const tacmap::image<float> map = tacmap::testing::conformance_image(96, 84, 7);
+  return map;
+}
+
+grid_t test_grid() {
+  const auto& map = test_map();
+  return grid_t({.width = map.cols(), .height = map.rows()}, mm_per_px, window);
+}
+
+// The window at `cell` with a little deterministic noise: a realistic touch, not an exact cut.
+tacmap::image<float> touch_at(const tacmap::grid_cell& cell, unsigned seed = 1) {
+  tacmap::image<float> z = test_map().block(cell.row, cell.col, window.height, window.width);
+  std::uint32_t state = seed * 2654435761U + 7U;
+  for (float& v : z.reshaped()) {
+    state ^= state << 13U;
+    state ^= state >> 17U;
+    state ^= state << 5U;
+    v += 0.03F * (static_cast<float>(state % 1000U) / 1000.0F - 0.5F);
+  }
+  return z;
+}
+
+template <class A, class B>
+double total_variation(const A& a, const B& b) {
+  return 0.5 * (a.template cast<double>() - b.template cast<double>()).abs().sum();
+}
+
+// A prior concentrated around `cell`: a Gaussian of `sigma` px (what a localized filter's
+// prediction looks like).
+Eigen::ArrayXf blob(const grid_t& grid, const tacmap::grid_cell& cell, double sigma) {
+  Eigen::ArrayXf p(grid.size());
+  for (Eigen::Index i = 0; i < grid.size(); ++i) {
+    const auto c = grid.cell(i);
+    const double r2 = static_cast<double>((c.row - cell.row) * (c.row - cell.row) +
+                                          (c.col - cell.col) * (c.col - cell.col));
+    p(i) = static_cast<float>(std::exp(-0.5 * r2 / (sigma * sigma)));
+  }
+  return p / p.sum();
+}
+
+// A model with a fixed table of log-likelihoods and the tracking hook: for the filter's own
+// arithmetic, independent of any descriptor.
+struct table_model {
+  struct measurement_type {
+    Eigen::ArrayXf ll;
+    double bound = 0.0;
+  };
+  template <class G>
+  void log_likelihood(const G&, const measurement_type& z, tacmap::belief_array<G>& out) const {
+    out = z.ll;
+  }
+  double last_bound = 0.0;
+  mutable double bound = 0.0;
+  [[nodiscard]] double log_likelihood_bound() const { return bound; }
+  template <class G>
+  void log_likelihood_on(const G&, const measurement_type& z, tacmap::belief_array<G>& out,
+                         std::span<const state_range> states) const {
+    for (const state_range& r : states)
+      out.segment(r.begin, r.end - r.begin) = z.ll.segment(r.begin, r.end - r.begin);
+  }
+};
+
+// The minimal conforming type of measurement/concept.hpp.
+struct uninformative_tracked {
+  struct measurement_type {};
+  template <class G>
+  void log_likelihood(const G&, const measurement_type&, tacmap::belief_array<G>& out) const {
+    out.setZero();
+  }
+  [[nodiscard]] double log_likelihood_bound() const { return 0.0; }
+  template <class G>
+  void log_likelihood_on(const G&, const measurement_type&, tacmap::belief_array<G>& out,
+                         std::span<const state_range> states) const {
+    for (const state_range& r : states) out.segment(r.begin, r.end - r.begin).setZero();
+  }
+};
+static_assert(tacmap::measures_on_states<uninformative_tracked, grid_t>);
+static_assert(tacmap::measures_on_states<table_model, grid_t>);
+static_assert(!tacmap::measures_on_states<tacmap::ncc_likelihood<float>, grid_t>);
+static_assert(
+    tacmap::measures_on_states<tacmap::descriptor_likelihood<tacmap::classic_sift>, grid_t>);
+
+}  // namespace
+
+TEST_CASE_TEMPLATE(
+    "the descriptor model's tracking hook writes its full log-likelihood, bit for bit", D,
+    tacmap::sift_lite, tacmap::classic_sift) {
+  const grid_t grid = test_grid();
+  const tacmap::image<float> z = touch_at({20, 31});
+  struct named {
+    const char* name;
+    tacmap::descriptor_likelihood_params p;
+  };
+  std::vector<named> configs = {
+      {"per window, aligned, exponential (default)", {}},
+      {"per window, all pairs, exponential", {.pairs = tacmap::pairing::all_pairs}},
+      {"per window, aligned, inverse", {.shape = tacmap::likelihood_shape::inverse}},
+      {"paper: all pairs, inverse", tacmap::descriptor_likelihood_params::paper()},
+      {"both_signs basis", {.both_signs = true}},
+      {"tempering 0.5, tau 0.3", {.tau = 0.3, .tempering = 0.5}},
+      {"shared dense (whole grid)", {.features = tacmap::window_features::shared_dense}},
+      {"either_per_patch (whole grid)", {.contrast = tacmap::contrast_sign::either_per_patch}},
+  };
+  for (const auto& c : configs) {
+    CAPTURE(c.name);
+    const tacmap::descriptor_likelihood<D> model(D{}, test_map(), window, c.p);
+    tacmap::testing::check_log_likelihood_on(model, grid, z);
+  }
+  SUBCASE("both signs in one pass: each block, restricted, equals the whole pass") {
+    for (const auto shape :
+         {tacmap::likelihood_shape::exponential, tacmap::likelihood_shape::inverse}) {
+      const tacmap::descriptor_likelihood<D> model(D{}, test_map(), window,
+                                                   {.shape = shape, .both_signs = true});
+      const Eigen::Index n = grid.size();
+      Eigen::ArrayXf full(2 * n), part = Eigen::ArrayXf::Constant(2 * n, NAN);
+      model.log_likelihood_both_signs(grid, z, full.data());
+      const std::vector<state_range> states = {{3, 4}, {40, 95}, {n - 13, n}};
+      model.log_likelihood_both_signs_on(grid, z, part.data(), states);
+      for (Eigen::Index sign = 0; sign < 2; ++sign)
+        for (const state_range& r : states)
+          for (Eigen::Index i = r.begin; i < r.end; ++i)
+            REQUIRE(part(sign * n + i) == full(sign * n + i));
+    }
+  }
+}
+
+TEST_CASE("the localizer's model (latent appearance, both signs) keeps the hook's promise") {
+  tacmap::localizer_config config;  // the defaults: classic_sift, per window, aligned, latent
+  config.lost_probability = 0.0;
+  auto filter = tacmap::make_planar_filter(config, test_map(), mm_per_px, window);
+  const auto& model = filter.measurement_model();
+  tacmap::testing::check_log_likelihood_on(model, filter.grid(), touch_at({11, 40}));
+  CHECK(model.log_likelihood_bound() == 0.0);
+  // NCC has no hook: the configured model reports no bound (the filter then takes the grid).
+  config.model = tacmap::measurement_kind::ncc;
+  const tacmap::configured_measurement ncc(config, test_map(), window);
+  CHECK(std::isinf(ncc.log_likelihood_bound()));
+}
+
+TEST_CASE("a tracked update equals the full update within its stated bound, same estimate") {
+  const grid_t grid = test_grid();
+  using model_t = tacmap::descriptor_likelihood<tacmap::sift_lite>;
+  tacmap::bayes_filter full(grid, tacmap::odometry_gaussian({.sigma_mm = 0.6, .k = 8}),
+                            model_t(tacmap::sift_lite{}, test_map(), window));
+  // Localize with full updates on a walk, then compare every further step from the same
+  // predicted belief: tracked against full. (SIFT-lite on this small map leaves the first
+  // touches' beliefs spread: those steps take the whole grid, full_wide.)
+  tacmap::grid_cell at{30, 20};
+  full.update(touch_at(at));
+  int tracked_steps = 0;
+  for (int step = 0; step < 10; ++step) {
+    CAPTURE(step);
+    const int dc = step % 4 < 2 ? 3 : -3, dr = step % 2 == 0 ? 2 : -1;
+    at = {at.row + dr, at.col + dc};
+    const tacmap::odometry u{.dx_mm = dc * mm_per_px, .dy_mm = dr * mm_per_px};
+    auto tracked = full;
+    tracked.set_tracking({.epsilon = 1e-6});
+    tracked.predict(u);
+    full.predict(u);
+    const auto z = touch_at(at, static_cast<unsigned>(step + 2));
+    const tacmap::update_report rt = tracked.update(z);
+    const tacmap::update_report rf = full.update(z);
+    CHECK(rf.path == update_path::full);
+    CHECK(rf.evaluated_states == grid.size());
+    if (rt.path != update_path::tracked) {
+      CHECK(total_variation(tracked.belief(), full.belief()) == 0.0);
+      continue;
+    }
+    ++tracked_steps;
+    CHECK(rt.evaluated_states < grid.size() / 4);
+    CHECK(rt.tracking_error_bound <= tracked.tracking().tolerance);
+    // The bound, plus float rounding of two normalisations.
+    CHECK(total_variation(tracked.belief(), full.belief()) <= rt.tracking_error_bound + 1e-5);
+    CHECK(tracked.estimate().map_index == full.estimate().map_index);
+    CHECK(rt.log_likelihood_max <= rf.log_likelihood_max);
+    CHECK(rt.log_marginal_likelihood() ==
+          doctest::Approx(rf.log_marginal_likelihood()).epsilon(1e-4));
+    CHECK(static_cast<double>(tracked.belief().sum()) == doctest::Approx(1.0).epsilon(1e-5));
+  }
+  CHECK(tracked_steps >= 6);
+}
+
+TEST_CASE("a touch that contradicts the prediction (a kidnap) falls back to the whole grid") {
+  const grid_t grid = test_grid();
+  using model_t = tacmap::descriptor_likelihood<tacmap::sift_lite>;
+  tacmap::bayes_filter full(grid, tacmap::odometry_gaussian({.sigma_mm = 0.6, .k = 8}),
+                            model_t(tacmap::sift_lite{}, test_map(), window));
+  full.set_prior(blob(grid, {8, 8}, 2.0));
+  auto tracked = full;
+  tracked.set_tracking({.epsilon = 1e-6});
+  // The sensor is far from where the prior puts it.
+  const auto z = touch_at({48, 56});
+  const tacmap::update_report rt = tracked.update(z);
+  full.update(z);
+  CHECK(rt.path == update_path::full_contradicted);
+  CHECK(rt.evaluated_states == grid.size());
+  CHECK(rt.tracking_error_bound == 0.0);
+  CHECK((tracked.belief() == full.belief()).all());
+}
+
+TEST_CASE("the bound holds where the outside matches best (adversarial table)") {
+  const grid_t grid = test_grid();
+  const Eigen::Index n = grid.size();
+  tacmap::bayes_filter f(grid, tacmap::odometry_gaussian{}, table_model{});
+  const Eigen::ArrayXf prior = blob(grid, {25, 30}, 1.5);
+  // Every state outside a few px of the blob matches perfectly (log-likelihood 0 = the bound),
+  // the blob's states at -2: the worst case for the states that were not evaluated.
+  table_model::measurement_type z{Eigen::ArrayXf::Constant(n, -2.0F), 0.0};
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto c = grid.cell(i);
+    if (std::abs(c.row - 25) + std::abs(c.col - 30) > 12) z.ll(i) = 0.0F;
+  }
+  for (const double tolerance : {1e-3, 1e-2, 0.3}) {
+    CAPTURE(tolerance);
+    tacmap::bayes_filter full = f;
+    full.set_prior(prior);
+    auto tracked = full;
+    tracked.set_tracking({.epsilon = 1e-4, .tolerance = tolerance});
+    const auto rt = tracked.update(z);
+    full.update(z);
+    const double tv = total_variation(tracked.belief(), full.belief());
+    if (rt.path == update_path::tracked) {
+      CHECK(rt.tracking_error_bound <= tolerance);
+      CHECK(tv <= rt.tracking_error_bound + 1e-6);
+    } else {
+      CHECK(rt.path == update_path::full_contradicted);
+      CHECK(tv == 0.0);
+    }
+  }
+}
+
+TEST_CASE(
+    "tracking: a uniform belief, a model without the hook and the paper's floor take the grid") {
+  const grid_t grid = test_grid();
+  SUBCASE("uniform: the support is every state") {
+    tacmap::bayes_filter f(
+        grid, tacmap::odometry_gaussian{},
+        tacmap::descriptor_likelihood<tacmap::sift_lite>(tacmap::sift_lite{}, test_map(), window));
+    f.set_tracking({.epsilon = 1e-6});
+    const auto r = f.update(touch_at({5, 5}));
+    CHECK(r.path == update_path::full_wide);
+    CHECK(r.evaluated_states == grid.size());
+  }
+  SUBCASE("NCC has no hook: tracking on, full updates") {
+    tacmap::bayes_filter f(grid, tacmap::odometry_gaussian{},
+                           tacmap::ncc_likelihood<float>(test_map(), window));
+    f.set_prior(blob(grid, {20, 20}, 1.0));
+    f.set_tracking({.epsilon = 1e-6});
+    CHECK(f.update(touch_at({20, 20})).path == update_path::full);
+  }
+  SUBCASE("the localizer's default motion floor spreads lost_probability over every state") {
+    auto f = tacmap::make_planar_filter(tacmap::localizer_config{}, test_map(), mm_per_px, window);
+    f.set_tracking({.epsilon = 1e-6});
+    f.update(touch_at({30, 30}));
+    f.predict(tacmap::odometry{.dx_mm = 0.4});
+    CHECK(f.update(touch_at({30, 32})).path == update_path::full_wide);
+  }
+}
+
+TEST_CASE("the localizer's filter without the floor tracks, within the bound of its full update") {
+  tacmap::localizer_config config;
+  config.lost_probability = 0.0;
+  config.wide_probability = 0.0;
+  auto full = tacmap::make_planar_filter(config, test_map(), mm_per_px, window);
+  tacmap::grid_cell at{22, 25};
+  full.update(touch_at(at));
+  int tracked_steps = 0;
+  for (int step = 0; step < 5; ++step) {
+    CAPTURE(step);
+    at = {at.row + 1, at.col + 3};
+    auto tracked = full;
+    tracked.set_tracking({.epsilon = 1e-6});
+    const tacmap::odometry u{.dx_mm = 3 * mm_per_px, .dy_mm = mm_per_px};
+    tracked.predict(u);
+    full.predict(u);
+    const auto z = touch_at(at, static_cast<unsigned>(step + 11));
+    const auto rt = tracked.update(z);
+    full.update(z);
+    if (rt.path != update_path::tracked) continue;
+    ++tracked_steps;
+    CHECK(total_variation(tracked.belief(), full.belief()) <= rt.tracking_error_bound + 1e-5);
+    const auto et = tracked.estimate(), ef = full.estimate();
+    CHECK(et.map_index == ef.map_index);
+    CHECK(et.hypothesis_probability[0] ==
+          doctest::Approx(ef.hypothesis_probability[0]).epsilon(1e-3));
+  }
+  CHECK(tracked_steps >= 3);
+}
+
+TEST_CASE("tracking refuses bad parameters and keeps the NaN and infinity guards") {
+  const grid_t grid = test_grid();
+  tacmap::bayes_filter f(grid, tacmap::odometry_gaussian{}, table_model{});
+  for (const double eps : {-1e-3, 0.7, std::numeric_limits<double>::quiet_NaN()}) {
+    const std::string msg = tacmap_test::message_of([&] { f.set_tracking({.epsilon = eps}); });
+    CHECK(msg.find("epsilon = ") != std::string::npos);
+    CHECK(msg.find("expected") != std::string::npos);
+  }
+  CHECK(tacmap_test::message_of([&] { f.set_tracking({.epsilon = 0.7}); }).find("0.7") !=
+        std::string::npos);
+  CHECK(tacmap_test::message_of([&] {
+          f.set_tracking({.epsilon = 1e-6, .tolerance = 0.0});
+        }).find("tolerance = 0") != std::string::npos);
+  CHECK(tacmap_test::message_of([&] {
+          f.set_tracking({.epsilon = 1e-6, .max_support = 1.5});
+        }).find("max_support = 1.5") != std::string::npos);
+  CHECK(f.tracking().epsilon == 0.0);  // unchanged by the refused calls
+
+  f.set_prior(blob(grid, {20, 30}, 1.5));
+  f.set_tracking({.epsilon = 1e-6});
+  const auto before = f.belief();
+  const Eigen::Index inside = grid.index({20, 30});
+  table_model::measurement_type z{Eigen::ArrayXf::Zero(grid.size()), 0.0};
+  z.ll(inside) = NAN;
+  const std::string nan_msg = tacmap_test::message_of<std::domain_error>([&] { f.update(z); });
+  CHECK(nan_msg.find("NaN at state " + std::to_string(inside)) != std::string::npos);
+  z.ll(inside) = std::numeric_limits<float>::infinity();
+  CHECK(tacmap_test::message_of<std::domain_error>([&] { f.update(z); }).find("+infinity") !=
+        std::string::npos);
+  CHECK((f.belief() == before).all());
+  // The filter still works afterwards, on the tracked path.
+  z.ll(inside) = 0.0F;
+  CHECK(f.update(z).path == update_path::tracked);
+  CHECK(f.estimate().map_index == inside);
+}
