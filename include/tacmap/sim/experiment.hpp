@@ -142,7 +142,9 @@ struct sequence_result {
   /// The object's relation this sequence (the scenario's polarity, drawn per sequence when
   /// random): true when its raised parts look darker in the photograph.
   bool raised_dark = false;
-  std::vector<touch_record> touches;
+  std::vector<touch_record> touches;  ///< one per touch, always
+  // The next three are filled only when `run` is asked to keep images (keep_images = true);
+  // otherwise they are empty, not one entry per touch: check their size before indexing.
   std::vector<image<float>> tactile_images;  ///< preprocessed, map scale (empty when rejected)
   std::vector<tactile_frame> frames;         ///< the raw frames the simulator rendered
   std::vector<image<float>> beliefs;         ///< position belief after each touch (all hypotheses)
