@@ -80,6 +80,40 @@ BENCHMARK(sift_lite_map_precompute<tacmap::window_features::per_window>)
 BENCHMARK(sift_lite_map_precompute<tacmap::window_features::shared_dense>)
     ->Unit(benchmark::kMillisecond);
 
+// Issue 14, item 1: preparing the map for per-window features. `D` as it is prepares them from
+// intermediates the windows share (dense_sift::describe_windows); `per_cut<D>` hides that hook,
+// so descriptor_likelihood falls back to the old loop, one `compute` per cut window (8,137
+// windows): the same descriptors within 1e-5 (tests/descriptor/test_describe_windows.cpp).
+template <class D>
+struct per_cut : D {
+  template <class... A>
+  void describe_windows(A&&...) const = delete;
+};
+static_assert(!tacmap::describes_windows<per_cut<tacmap::classic_sift>>);
+
+template <class D>
+void map_precompute_per_window(benchmark::State& state) {
+  const auto map = bench_map();
+  const auto grid = grid_t::paper();
+  for (auto _ : state) {
+    // The default model's configuration: per window, aligned.
+    const tacmap::descriptor_likelihood<D> model(D{}, map, grid.window_size(), {});
+    benchmark::DoNotOptimize(&model);
+  }
+}
+void classic_sift_map_precompute(benchmark::State& s) {
+  map_precompute_per_window<tacmap::classic_sift>(s);
+}
+void classic_sift_map_precompute_per_cut(benchmark::State& s) {
+  map_precompute_per_window<per_cut<tacmap::classic_sift>>(s);
+}
+void sift_lite_map_precompute_per_cut(benchmark::State& s) {
+  map_precompute_per_window<per_cut<tacmap::sift_lite>>(s);
+}
+BENCHMARK(classic_sift_map_precompute)->Unit(benchmark::kMillisecond);
+BENCHMARK(classic_sift_map_precompute_per_cut)->Unit(benchmark::kMillisecond);
+BENCHMARK(sift_lite_map_precompute_per_cut)->Unit(benchmark::kMillisecond);
+
 void sift_lite_shared_window_loop_baseline(benchmark::State& state) {
   const auto map = bench_map();
   const auto grid = grid_t::paper();

@@ -3,9 +3,11 @@
 #pragma once
 
 #include <concepts>
+#include <span>
 #include <vector>
 
 #include "tacmap/grid/concept.hpp"
+#include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/image.hpp"
 
 namespace tacmap {
@@ -77,6 +79,15 @@ concept descriptor = belief_scalar<typename D::scalar_type> &&
 ///      (max + min - img) is element p[i] of the image's (`dense_sift`: orientation channels
 ///      turned by half a turn). `descriptor_likelihood_params::both_signs` then scores both
 ///      contrast signs in one pass.
+///  H4. `describe_windows(map, window, offsets, sink)`: the descriptors of the patches whose
+///      top-left pixels are `offsets` (inside a window) of EVERY window of `map`, each equal to
+///      compute(window cut from the map)'s column at that offset, delivered one row of windows
+///      at a time: for r = 0 .. map rows - window.height, in order, sink(r, block) with `block`
+///      an `Eigen::Array<scalar_type, Dynamic, Dynamic>` of dimension() x (cols * M), column
+///      c * M + m = patch m of the window with top-left (r, c) (cols = map cols - window.width
+///      + 1, M = offsets.size()). `descriptor_likelihood` (per_window features) then prepares a
+///      map from it instead of one `compute` per window; a descriptor can share work between
+///      overlapping windows there (`dense_sift`: gradients, channels and pooled sums, issue 14).
 template <class D>
 concept euclidean_descriptor = descriptor<D> && requires {
   requires D::euclidean_distance;
@@ -96,6 +107,24 @@ concept samples_on_grid = descriptor<D> &&
 template <class D>
 concept contrast_symmetric_descriptor = euclidean_descriptor<D> && requires(const D& d) {
   { d.contrast_permutation() } -> std::convertible_to<std::vector<Eigen::Index>>;
+};
+
+namespace detail {
+/// The sink `describes_windows` is checked with: what a caller of H4 passes must be callable so.
+template <class T>
+struct window_rows_sink {
+  void operator()(Eigen::Index /*row*/,
+                  const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& /*block*/) const {}
+};
+}  // namespace detail
+
+/// H4 above.
+template <class D>
+concept describes_windows = descriptor<D> &&
+    requires(const D& d, const image<typename D::scalar_type>& map, pixel_size window,
+             std::span<const grid_cell> offsets,
+             detail::window_rows_sink<typename D::scalar_type> sink) {
+  d.describe_windows(map, window, offsets, sink);
 };
 
 }  // namespace tacmap

@@ -17,6 +17,7 @@
 
 #include "tacmap/descriptor/concept.hpp"
 #include "tacmap/descriptor/detail/dense_sift_kernels.hpp"
+#include "tacmap/descriptor/detail/dense_sift_windows.hpp"
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/image.hpp"
 
@@ -378,6 +379,80 @@ class dense_sift {
     return out;
   }
 
+  /// H4 (descriptor/concept.hpp): the descriptors of the patches at `offsets` (top-left pixels
+  /// inside a window) of every `window`-sized window of `map`, each what `compute` gives on the
+  /// window cut from the map: for each window row r = 0 .. map rows - window height, in order,
+  /// calls sink(r, block) with block(descriptor_size x cols * M), column c * M + m = patch m of
+  /// the window with top-left (r, c), cols = map cols - window width + 1, M = offsets.size().
+  /// Equal to compute(map.block(r, c, h, w)).at(offsets[m].row, offsets[m].col) within 1e-5.
+  ///
+  /// Not one extraction per window: from shared intermediates (detail/dense_sift_windows.hpp).
+  /// The window's division by its peak is a factor on its pooled values; its mirrored padding
+  /// only changes pixels within 2 px of its border, whose stencils depend on where in the window
+  /// they are, not on the window; and its zero outside is which taps each bin keeps, the same
+  /// for every window. So the channels and pooled sums are computed once per map and each
+  /// window's patches are a few weighted rows of them (issue 14; measured in
+  /// bench/measurement_bench.cpp, `classic_sift_map_precompute`). Falls back to the per-window
+  /// extraction where that reasoning does not hold: sigma_edge > 1 (filters wider than the
+  /// mirrored padding, which then reach the padded image's mean), windows narrower than 4 px,
+  /// and single windows whose peak is below 2^-24 of the map's (the shared channels would lose
+  /// precision in float there).
+  ///
+  /// Throws `std::invalid_argument` when the map is smaller than a patch or not finite (as
+  /// `compute`), the window is empty or larger than the map, or a patch at an offset does not
+  /// lie inside the window.
+  template <class Sink>
+  void describe_windows(const image_view<T>& map, pixel_size window,
+                        std::span<const grid_cell> offsets, Sink&& sink) const {
+    check_image(map, "describe_windows");
+    check_windows(map, window, offsets);
+    const Eigen::Index rows = map.rows() - window.height + 1;
+    const Eigen::Index cols = map.cols() - window.width + 1;
+    const auto m_count = static_cast<Eigen::Index>(offsets.size());
+    Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic> block(descriptor_size, cols * m_count);
+    const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& done = block;
+    const auto from_cut = [&](Eigen::Index r, Eigen::Index c) {  // the reference path
+      const descriptor_field<T> f = compute(map.block(r, c, window.height, window.width));
+      for (Eigen::Index m = 0; m < m_count; ++m) {
+        const grid_cell o = offsets[static_cast<std::size_t>(m)];
+        block.col(c * m_count + m) = f.at(o.row, o.col);
+      }
+    };
+    constexpr Eigen::Index frame = detail::dsift::mirror_pad;
+    if (m_count == 0 || gradient_.radius != frame || !detail::dsift::antisymmetric(gradient_) ||
+        window.height < 2 * frame || window.width < 2 * frame) {
+      for (Eigen::Index r = 0; r < rows; ++r) {
+        for (Eigen::Index c = 0; c < cols; ++c) from_cut(r, c);
+        sink(r, done);
+      }
+      return;
+    }
+    // Pipeline step 1 as a factor: the map's channels are of map / (map peak); a window's are
+    // (map peak / window peak) times those.
+    const T map_peak = peak(map);
+    const image<T> scaled = map / map_peak;
+    const image<T> window_peak = detail::dsift::window_peaks<T>(map, window);
+    constexpr T precision_limit = T(16777216);  // 2^24
+    detail::dsift::window_pooler<NumBins, NumAngles, T> pool(
+        scaled, window, offsets, bin_, gradient_, pooling_, cos_a_, sin_a_, params_.alpha);
+    std::vector<Eigen::Index> cut;
+    std::vector<T> factor(static_cast<std::size_t>(cols));
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      cut.clear();
+      for (Eigen::Index c = 0; c < cols; ++c) {
+        const T s = window_peak(r, c);
+        // An all-zero window has zero channels: factor 0 keeps it zero (`compute` gives zeros).
+        const T f = s > T(0) ? map_peak / s : T(0);
+        if (f > precision_limit) cut.push_back(c);
+        factor[static_cast<std::size_t>(c)] = f;
+      }
+      pool(r, factor.data(), block.data());
+      normalise(block.data(), cols * m_count);
+      for (const Eigen::Index c : cut) from_cut(r, c);
+      sink(r, done);
+    }
+  }
+
   /// Euclidean distance between two descriptors (the paper's eq.\ (1) sums these). Throws
   /// `std::invalid_argument` when a column's length is not `dimension()`.
   [[nodiscard]] T distance(column a, column b) const {
@@ -451,6 +526,30 @@ class dense_sift {
                                           img.cols(),
                                           " image holds NaN or infinite pixels; replace them "
                                           "(e.g. by 0) before extracting descriptors");
+    }
+  }
+
+  void check_windows(const image_view<T>& map, pixel_size window,
+                     std::span<const grid_cell> offsets) const {
+    if (window.width <= 0 || window.height <= 0 || window.width > map.cols() ||
+        window.height > map.rows()) {
+      detail::fail<std::invalid_argument>(
+          "dense_sift::describe_windows: the window is ", window.width, " x ", window.height,
+          " px (width x height) and the map ", map.cols(), " x ", map.rows(),
+          "; expected a positive window no larger than the map");
+    }
+    const Eigen::Index last_row = window.height - params_.patch_size;
+    const Eigen::Index last_col = window.width - params_.patch_size;
+    for (std::size_t i = 0; i < offsets.size(); ++i) {
+      const grid_cell o = offsets[i];
+      if (o.row < 0 || o.row > last_row || o.col < 0 || o.col > last_col) {
+        detail::fail<std::invalid_argument>(
+            "dense_sift::describe_windows: offsets[", i, "] = (row ", o.row, ", col ", o.col,
+            ") puts the ", params_.patch_size, " x ", params_.patch_size, " px patch outside the ",
+            window.height, " x ", window.width,
+            " px window (rows x cols); expected 0 <= row <= ", last_row,
+            " and 0 <= col <= ", last_col, " (window size - patch_size)");
+      }
     }
   }
 
@@ -541,6 +640,7 @@ using classic_sift = dense_sift<4, 8>;
 static_assert(descriptor<sift_lite>);
 static_assert(descriptor<classic_sift>);
 static_assert(descriptor<dense_sift<2, 8, double>>);
+static_assert(describes_windows<sift_lite>);
 
 }  // namespace tacmap
 

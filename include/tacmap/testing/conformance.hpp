@@ -13,10 +13,11 @@
 //    images, and rejects an image smaller than a patch or holding NaN with
 //    std::invalid_argument;
 //  * distance(a, a) == 0, distance(a, b) == distance(b, a) >= 0, finite;
-//  * each optional hook the type declares (tacmap/descriptor/concept.hpp, H1-H3) keeps its
+//  * each optional hook the type declares (tacmap/descriptor/concept.hpp, H1-H4) keeps its
 //    promise: `euclidean_distance` -> distance() is the Euclidean norm; `sample()` -> compute()'s
 //    columns on the spacing grid, row-major; `contrast_permutation()` -> an involution without
 //    fixed points that maps the image's descriptors to the inverted image's;
+//    `describe_windows()` -> compute()'s columns of every window cut from a map, row by row;
 //  * plugged into `descriptor_likelihood` on the paper's grid, a measurement update leaves a
 //    finite, normalised posterior, and (aligned pairing) a tactile image cut from the map ranks
 //    within 5 mm of its window.
@@ -154,6 +155,40 @@ TEST_CASE_TEMPLATE_DEFINE("tacmap descriptor conformance", D, tacmap_descriptor_
               worst, std::abs(static_cast<double>(g.values(i, k) -
                                                   f.values(perm[static_cast<std::size_t>(i)], k))));
       CHECK(worst <= 1e-4);
+    }
+  }
+
+  if constexpr (tacmap::describes_windows<D>) {
+    SUBCASE("H4: describe_windows() gives compute()'s columns of every cut window, row by row") {
+      // Windows touching every border of the map, patches every 9 px down the paper's window.
+      const tacmap::image<T> map = tacmap::testing::conformance_image(47, 25, 7).template cast<T>();
+      const tacmap::pixel_size window{.width = 18, .height = 42};
+      std::vector<tacmap::grid_cell> offsets;
+      for (Eigen::Index oy = 0; oy + p <= window.height; oy += 9) offsets.push_back({oy, 0});
+      const auto m_count = static_cast<Eigen::Index>(offsets.size());
+      const Eigen::Index cols = map.cols() - window.width + 1;
+      Eigen::Index next = 0;
+      double worst = 0.0;
+      d.describe_windows(
+          map, window, std::span<const tacmap::grid_cell>(offsets),
+          [&](Eigen::Index r, const Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic>& block) {
+            REQUIRE(r == next++);
+            REQUIRE(block.rows() == d.dimension());
+            REQUIRE(block.cols() == cols * m_count);
+            for (Eigen::Index c = 0; c < cols; ++c) {
+              const tacmap::image<T> cut = map.block(r, c, window.height, window.width);
+              const auto f = d.compute(cut);
+              for (Eigen::Index m = 0; m < m_count; ++m) {
+                const tacmap::grid_cell o = offsets[static_cast<std::size_t>(m)];
+                worst = std::max(worst, static_cast<double>((block.col(c * m_count + m) -
+                                                             f.at(o.row, o.col))
+                                                                .abs()
+                                                                .maxCoeff()));
+              }
+            }
+          });
+      CHECK(next == map.rows() - window.height + 1);
+      CHECK(worst <= 1e-5);
     }
   }
 
