@@ -703,7 +703,7 @@ descriptor_likelihood<Descriptor>::descriptor_likelihood(Descriptor descriptor,
                                detail::descriptor_tiles<scalar_type>::for_overwrite);
     descriptor_matrix column(dim, 1);  // both_signs: one window patch
     if constexpr (describes_windows<Descriptor>) {
-      // The same descriptors from work the windows share (dense_sift: 176 -> 10 ms for
+      // The same descriptors from work the windows share (dense_sift: 178 -> 8.2 ms for
       // classic_sift on 120 px, issue 14), a row of windows at a time; patch m of the row's
       // windows is every M-th column of the block.
       descriptor_matrix basis_row;
