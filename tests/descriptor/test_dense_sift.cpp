@@ -3,10 +3,12 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <random>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "blob_images.hpp"
@@ -589,4 +591,138 @@ TEST_CASE("distance is Euclidean, symmetric and zero on itself") {
   const Eigen::ArrayXf short_column = Eigen::ArrayXf::Zero(31);
   CHECK_THROWS_WITH_AS(static_cast<void>(d.distance(a, short_column)),
                        doctest::Contains("length 32 and 31"), std::invalid_argument);
+}
+
+// The hand-vectorised normalisation kernels against their scalar references
+// (detail/dense_sift_kernels.hpp): random descriptors of both branches, all-zero ones, counts
+// that are not a multiple of the register width.
+namespace {
+
+/// Random non-negative descriptors (pooled channels are non-negative): strong ones, weak ones
+/// (scaled below the threshold) and all-zero ones, mixed.
+template <class T>
+std::vector<T> random_descriptors(Eigen::Index size, Eigen::Index count, unsigned seed) {
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<T> v(static_cast<std::size_t>(size * count));
+  for (Eigen::Index c = 0; c < count; ++c) {
+    const double scale = c % 5 == 0 ? 0.0 : (c % 3 == 0 ? 0.01 : 3.0 * u(gen));
+    // Some peaky descriptors, so that the clamp is active.
+    const Eigen::Index peak =
+        c % 2 == 0 ? static_cast<Eigen::Index>(u(gen) * static_cast<double>(size)) : -1;
+    for (Eigen::Index i = 0; i < size; ++i) {
+      v[static_cast<std::size_t>(c * size + i)] =
+          static_cast<T>(scale * (i == peak ? 20.0 : u(gen)));
+    }
+  }
+  return v;
+}
+
+template <int Size, class T>
+void check_normalise(Eigen::Index count, unsigned seed, double tolerance) {
+  CAPTURE(Size);
+  CAPTURE(count);
+  const std::vector<T> input = random_descriptors<T>(Size, count, seed);
+  std::vector<T> simd = input;
+  std::vector<T> eigen = input;
+  std::vector<T> scalar = input;
+  tacmap::detail::dsift::normalise_simd<tacmap::detail::kernel_arch<T>, Size>(simd.data(), count,
+                                                                              T(1), T(0.2));
+  tacmap::detail::dsift::normalise_eigen<Size>(eigen.data(), count, T(1), T(0.2));
+  tacmap::detail::dsift::normalise_scalar<Size>(scalar.data(), count, T(1), T(0.2));
+  double worst = 0.0;
+  double worst_eigen = 0.0;
+  for (std::size_t i = 0; i < input.size(); ++i) {
+    worst = std::max(worst, std::abs(static_cast<double>(simd[i]) - scalar[i]));
+    worst_eigen = std::max(worst_eigen, std::abs(static_cast<double>(eigen[i]) - scalar[i]));
+  }
+  CHECK(worst <= tolerance);
+  CHECK(worst_eigen <= tolerance);
+  // Weak descriptors are left exactly as they are.
+  for (Eigen::Index c = 0; c < count; ++c) {
+    double norm = 0.0;
+    for (Eigen::Index i = 0; i < Size; ++i) {
+      norm += std::pow(static_cast<double>(input[static_cast<std::size_t>(c * Size + i)]), 2);
+    }
+    if (std::sqrt(norm) < 0.99) {
+      for (Eigen::Index i = 0; i < Size; ++i) {
+        const auto k = static_cast<std::size_t>(c * Size + i);
+        CHECK(simd[k] == input[k]);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("normalise_simd equals the scalar normalisation (both branches, any count)") {
+  for (Eigen::Index count : {0, 1, 3, 7, 8, 9, 16, 29}) {
+    check_normalise<32, float>(count, static_cast<unsigned>(count) + 1U, 1e-6);
+    check_normalise<128, float>(count, static_cast<unsigned>(count) + 2U, 1e-6);
+    check_normalise<32, double>(count, static_cast<unsigned>(count) + 3U, 1e-12);
+  }
+}
+
+TEST_CASE("assemble_normalise_simd equals assembling and the scalar normalisation") {
+  using tacmap::detail::kernel_arch;
+  using namespace tacmap::detail::dsift;
+  auto check = [](auto bins, auto angles, Eigen::Index bin, Eigen::Index count, unsigned seed) {
+    constexpr int nb = decltype(bins)::value;
+    constexpr int na = decltype(angles)::value;
+    constexpr Eigen::Index size = nb * nb * na;
+    CAPTURE(nb);
+    CAPTURE(count);
+    // NumBins pooled rows of nx pixels (any non-negative values), their squared norms padded.
+    const Eigen::Index nx = count + (nb - 1) * bin;
+    const std::vector<float> pooled = random_descriptors<float>(na, nb * nx, seed);
+    std::vector<std::vector<float>> squares(static_cast<std::size_t>(nb));
+    std::array<const float*, static_cast<std::size_t>(nb)> rows{};
+    std::array<const float*, static_cast<std::size_t>(nb)> sq{};
+    for (std::size_t by = 0; by < static_cast<std::size_t>(nb); ++by) {
+      rows[by] = pooled.data() + static_cast<Eigen::Index>(by) * nx * na;
+      squares[by].assign(static_cast<std::size_t>(nx + 16), 0.0F);
+      pixel_square_norms_simd<kernel_arch<float>, na>(rows[by], nx, squares[by].data());
+      for (Eigen::Index x = 0; x < nx; ++x) {
+        double s = 0.0;
+        for (Eigen::Index k = 0; k < na; ++k)
+          s += std::pow(static_cast<double>(rows[by][x * na + k]), 2);
+        CHECK(std::abs(squares[by][static_cast<std::size_t>(x)] - s) <= 1e-6 * (1.0 + s));
+      }
+      sq[by] = squares[by].data();
+    }
+    std::vector<float> simd(static_cast<std::size_t>(size * count), -1.0F);
+    std::vector<float> scalar(simd.size(), -2.0F);
+    assemble_normalise_simd<kernel_arch<float>, nb, na>(rows.data(), sq.data(), bin, count, 1.0F,
+                                                        0.2F, simd.data());
+    assemble_normalise_scalar<nb, na>(rows.data(), bin, count, 1.0F, 0.2F, scalar.data());
+    double worst = 0.0;
+    for (std::size_t i = 0; i < simd.size(); ++i) {
+      worst = std::max(worst, std::abs(static_cast<double>(simd[i]) - scalar[i]));
+    }
+    CHECK(worst <= 1e-6);
+  };
+  for (Eigen::Index count : {1, 5, 8, 13, 40}) {
+    check(std::integral_constant<int, 2>{}, std::integral_constant<int, 8>{}, 9, count, 5U);
+    check(std::integral_constant<int, 4>{}, std::integral_constant<int, 8>{}, 4, count, 6U);
+  }
+}
+
+TEST_CASE("compute on a wide image equals describe_at at scattered positions") {
+  // Wider than the reference tests' images: many whole registers of descriptors per row.
+  const sift_lite d;
+  const auto img = tactile_like_image<float>(61, 150, 21);
+  const auto field = d.compute(img);
+  std::vector<tacmap::grid_cell> at;
+  for (Eigen::Index r = 0; r < field.rows; r += 7) {
+    for (Eigen::Index c = 0; c < field.cols; c += 5) at.push_back({r, c});
+  }
+  const auto out = d.describe_at(img, at);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    worst = std::max(worst, static_cast<double>((out.col(static_cast<Eigen::Index>(i)) -
+                                                 field.at(at[i].row, at[i].col))
+                                                    .abs()
+                                                    .maxCoeff()));
+  }
+  CHECK(worst <= 1e-5);
 }

@@ -227,15 +227,39 @@ class dense_sift {
     field.rows = h - params_.patch_size + 1;
     field.cols = w - params_.patch_size + 1;
     field.values.resize(descriptor_size, field.rows * field.cols);
+    detail::dsift::advise_huge_pages(field.values.data(),
+                                     static_cast<std::size_t>(field.values.size()) * sizeof(T));
+    // With whole-register bins, each pooled pixel's squared norm is kept beside the ring and the
+    // descriptors are assembled and normalised in one pass (detail::dsift::
+    // assemble_normalise_simd); the padding (zeros) covers the last register's reads.
+    constexpr bool fused = detail::dsift::simd_assemble<NumAngles, T>;
+    using arch = detail::kernel_arch<T>;
+    const Eigen::Index square_size = nx + static_cast<Eigen::Index>(xsimd::batch<T, arch>::size);
+    Eigen::Array<T, Eigen::Dynamic, 1> squares =
+        Eigen::Array<T, Eigen::Dynamic, 1>::Zero(fused ? ring_rows * square_size : 0);
+
     Eigen::Index next = 0;  // the next pooled row to compute
     for (Eigen::Index r = 0; r < field.rows; ++r) {
-      for (; next < r + ring_rows; ++next) pool(next, ring.data() + slot(next) * row_size);
-      const auto rows = bin_rows(ring.data(), row_size, r, slot);
-      for (Eigen::Index c = 0; c < field.cols; ++c) {
-        assemble(rows, c, field.values.col(r * field.cols + c).data());
+      for (; next < r + ring_rows; ++next) {
+        pool(next, ring.data() + slot(next) * row_size);
+        if constexpr (fused) {
+          detail::dsift::pixel_square_norms_simd<arch, NumAngles>(
+              ring.data() + slot(next) * row_size, nx, squares.data() + slot(next) * square_size);
+        }
       }
-      // One row of patches at a time, while it is still in cache.
-      normalise(field.values.col(r * field.cols).data(), field.cols);
+      const auto rows = bin_rows(ring.data(), row_size, r, slot);
+      T* out = field.values.col(r * field.cols).data();
+      if constexpr (fused) {
+        detail::dsift::assemble_normalise_simd<arch, NumBins, NumAngles>(
+            rows.data(), bin_rows(squares.data(), square_size, r, slot).data(), bin_, field.cols,
+            static_cast<T>(params_.norm_threshold), static_cast<T>(params_.clamp), out);
+      } else {
+        for (Eigen::Index c = 0; c < field.cols; ++c) {
+          assemble(rows, c, field.values.col(r * field.cols + c).data());
+        }
+        // One row of patches at a time, while it is still in cache.
+        normalise(out, field.cols);
+      }
     }
     return field;
   }
