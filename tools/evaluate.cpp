@@ -230,6 +230,7 @@ int main(int argc, char** argv) try {
   std::string polarity_name;  // empty: the scenario's
   double tempering = 1.0, motion_sigma = 1.0;
   int motion_k = 8;
+  long long patch_spacing = 0;  // 0: the model's default
   std::vector<int> headings{0};
   bool random_orientation = false;
   double turn_sigma_deg = 5.0;
@@ -359,6 +360,9 @@ int main(int argc, char** argv) try {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--motion-sigma", motion_sigma, "odometry noise sigma, mm")
       ->check(CLI::PositiveNumber);
+  app.add_option("--spacing", patch_spacing,
+                 "px between the tactile image's descriptor patches (default: the paper's 9)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--motion-k", motion_k, "odometry noise neighbours (4, 8, 12, 20, 24, ...)");
   app.add_option("--headings", headings,
                  "0 = known orientation (the paper); N = localize x, y AND heading over N "
@@ -481,6 +485,7 @@ int main(int argc, char** argv) try {
     base.tempering = tempering;
     base.motion_sigma_mm = motion_sigma;
     base.motion_k = motion_k;
+    if (patch_spacing > 0) base.patch_spacing = patch_spacing;
     base.simulator_seed = seed;
     base.simulator = sim;
     base.scenario = effects;

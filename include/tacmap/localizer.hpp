@@ -121,6 +121,9 @@ struct localizer_config {
   /// Temperature: exponential shape (descriptor distance units) or NCC (log p = ncc / tau).
   /// Empty: the model's own default (descriptor 0.15, NCC 0.1).
   std::optional<double> tau;
+  /// Pixels between the tactile image's descriptor patches (descriptor models; empty: the
+  /// paper's 9, `descriptor_likelihood_params::spacing`).
+  std::optional<Eigen::Index> patch_spacing;
   double tempering = 1.0;             ///< exponent on the likelihood
   double motion_sigma_mm = 1.0;       ///< odometry_gaussian sigma (Sec. III-B)
   int motion_k = 8;                   ///< odometry_gaussian neighbours (paper: 8)
@@ -249,6 +252,8 @@ struct localizer_config {
       t << *tau;
       out += "/tau=" + t.str();
     }
+    if (patch_spacing && model != measurement_kind::ncc)
+      out += "/spacing=" + std::to_string(*patch_spacing);
     if (appearance != appearance_handling::fixed) out += std::string("/") + to_string(appearance);
     if (appearance_switch) {
       std::ostringstream t;
@@ -384,6 +389,7 @@ class configured_measurement {
     p.shape = config.shape;
     p.features = config.features;
     if (config.tau) p.tau = *config.tau;
+    if (config.patch_spacing) p.spacing = *config.patch_spacing;
     p.tempering = config.tempering;
     if (config.appearance == appearance_handling::per_patch)
       p.contrast = contrast_sign::either_per_patch;
@@ -433,6 +439,7 @@ class configured_rotated_measurement {
     p.pairs = config.pairs;
     p.shape = config.shape;
     if (config.tau) p.tau = *config.tau;
+    if (config.patch_spacing) p.spacing = *config.patch_spacing;
     p.tempering = config.tempering;
     if (config.model == measurement_kind::lite)
       return variant_type(std::in_place_index<0>, sift_lite{}, map, grid, p);

@@ -274,3 +274,26 @@ TEST_CASE("a localizer refuses bad input with messages that say what to do") {
   const auto b = loc.belief();
   CHECK(b.maxCoeff() == doctest::Approx(b.minCoeff()));
 }
+
+TEST_CASE("localizer_config::patch_spacing reaches the descriptor model and is checked") {
+  const auto& p = gecko();
+  auto config = fast_config();
+  CHECK(config.name().find("spacing") == std::string::npos);
+  config.patch_spacing = 12;  // sift_lite's 18 px patches at rows 0, 12, 24: the whole window
+  CHECK(config.name().find("/spacing=12") != std::string::npos);
+  tacmap::localizer paper_spacing(p.map, p.mm_per_px, fast_config());
+  tacmap::localizer covering(p.map, p.mm_per_px, config);
+  auto sim = gecko_simulator(5);
+  const auto frame = sim.render(p.locations[2].pose());
+  paper_spacing.touch(frame);
+  covering.touch(frame);
+  REQUIRE(covering.planar_filter() != nullptr);
+  // Other patches, other likelihoods: the beliefs differ.
+  CHECK((covering.planar_filter()->belief() - paper_spacing.planar_filter()->belief())
+            .abs()
+            .maxCoeff() > 1e-6F);
+  config.patch_spacing = 0;
+  CHECK(tacmap_test::message_of([&] {
+          tacmap::localizer bad(p.map, p.mm_per_px, config);
+        }).find("spacing = 0") != std::string::npos);
+}
