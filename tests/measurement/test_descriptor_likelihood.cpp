@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <stdexcept>
 #include <string>
 
 #include "raw_patch_descriptor.hpp"
+#include "tacmap/descriptor/dense_sift.hpp"
 #include "tacmap/measurement/descriptor_likelihood.hpp"
 #include "test_support.hpp"
 
@@ -319,4 +321,28 @@ TEST_CASE("either_per_patch is refused with all pairs, naming both settings") {
   CHECK_NOTHROW(
       descriptor_likelihood_params{.contrast = contrast_sign::either_per_patch}.validate());
   CHECK(descriptor_likelihood_params{}.contrast == contrast_sign::as_is);
+}
+
+TEST_CASE("a map whose preparation cannot fit in memory is refused before allocating it") {
+  // 6000 x 6000 px (144 MB as floats): per window, classic SIFT would keep 3 x 128 floats of
+  // each of 36 million windows, about 55 GB.
+  const tacmap::image<float> map = tacmap::image<float>::Constant(6000, 6000, 0.5F);
+  const tacmap::pixel_size window{.width = 18, .height = 42};
+  const std::uint64_t windows = (6000ULL - 42 + 1) * (6000ULL - 18 + 1);
+  const std::uint64_t needed = windows * 3 * 128 * sizeof(float);
+  const auto available = tacmap::available_memory_bytes();
+  if (!available || *available >= needed)
+    return;  // a machine that could hold it: nothing to refuse
+  try {
+    const tacmap::descriptor_likelihood<tacmap::classic_sift> model({}, map, window);
+    FAIL("expected insufficient_memory");
+  } catch (const tacmap::insufficient_memory& e) {
+    CHECK(e.needed_bytes >= needed);
+    CHECK(e.available_bytes < e.needed_bytes);
+    const std::string m = e.what();
+    CHECK(m.find("descriptor_likelihood") != std::string::npos);
+    CHECK(m.find("per-window descriptors") != std::string::npos);
+    CHECK(m.find("GB") != std::string::npos);
+    CHECK(m.find("shared_dense") != std::string::npos);
+  }
 }

@@ -35,12 +35,15 @@
 #include <algorithm>
 #include <cmath>
 #include <concepts>
+#include <cstdint>
 #include <span>
+#include <sstream>
 #include <stdexcept>
 #include <utility>
 #include <vector>
 
 #include "tacmap/descriptor/concept.hpp"
+#include "tacmap/detail/memory_budget.hpp"
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/measurement/concept.hpp"
@@ -658,6 +661,32 @@ descriptor_likelihood<Descriptor>::descriptor_likelihood(Descriptor descriptor,
   params.validate();
   const Eigen::Index p = descriptor_.patch_size();
   offsets_ = detail::checked_patch_offsets("descriptor_likelihood", map, window, p, params.spacing);
+  {
+    // Refused before allocating (issue 14, "Bad input"): the dense field and its tiled copy,
+    // and per window M descriptors of every window — 1.4 GB for classic SIFT on 640 x 480.
+    const auto dim = static_cast<std::uint64_t>(descriptor_.dimension());
+    const auto field_count = detail::saturating_product(map.rows() - p + 1, map.cols() - p + 1);
+    const auto windows =
+        detail::saturating_product(map.rows() - window.height + 1, map.cols() - window.width + 1);
+    const std::uint64_t field_bytes =
+        detail::saturating_product(2, field_count, dim, sizeof(scalar_type));
+    const std::uint64_t window_bytes =
+        params.features == window_features::per_window
+            ? detail::saturating_product(windows, offsets_.size(), dim, sizeof(scalar_type))
+            : 0;
+    const std::uint64_t total = window_bytes > ~std::uint64_t{0} - field_bytes
+                                    ? ~std::uint64_t{0}
+                                    : field_bytes + window_bytes;
+    std::ostringstream what;
+    what << "the map's dense descriptors (" << field_count << " x " << dim << " values, twice)";
+    if (window_bytes > 0)
+      what << " and the per-window descriptors (" << windows << " windows x " << offsets_.size()
+           << " patches x " << dim << " values)";
+    detail::check_memory("descriptor_likelihood", what.str(), total,
+                         "use a coarser map (fewer mm per px means more states), "
+                         "window_features::shared_dense (no per-window copies), or a machine "
+                         "with more memory");
+  }
   const image<scalar_type> map_t = map.template cast<scalar_type>();
   field_ = descriptor_.compute(map_t);
   TACMAP_ASSERT(field_.rows == map.rows() - p + 1 && field_.cols == map.cols() - p + 1,
