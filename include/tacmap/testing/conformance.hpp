@@ -180,10 +180,9 @@ TEST_CASE_TEMPLATE_DEFINE("tacmap descriptor conformance", D, tacmap_descriptor_
               const auto f = d.compute(cut);
               for (Eigen::Index m = 0; m < m_count; ++m) {
                 const tacmap::grid_cell o = offsets[static_cast<std::size_t>(m)];
-                worst = std::max(worst, static_cast<double>((block.col(c * m_count + m) -
-                                                             f.at(o.row, o.col))
-                                                                .abs()
-                                                                .maxCoeff()));
+                worst = std::max(
+                    worst, static_cast<double>(
+                               (block.col(c * m_count + m) - f.at(o.row, o.col)).abs().maxCoeff()));
               }
             }
           });
