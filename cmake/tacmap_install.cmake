@@ -3,7 +3,8 @@
 #   include/tacmap/...                   the headers
 #   share/cmake/tacmap/                  tacmapConfig.cmake, its version file, the exported
 #                                        targets and the modules the config includes:
-#                                        tacmap::image_file's, tacmap::phantom_omni's and
+#                                        tacmap::image_file's, tacmap::phantom_omni's,
+#                                        tacmap::tbb's and
 #                                        FindOpenHaptics.cmake (the SDK is found on the
 #                                        consumer's machine)
 #   share/pkgconfig/tacmap.pc            for builds without CMake (header-only: no libdir, so
@@ -36,6 +37,7 @@ install(FILES "${CMAKE_CURRENT_BINARY_DIR}/tacmapConfig.cmake"
               cmake/tacmap_xsimd_compat.cmake
               cmake/tacmap_image_file.cmake
               cmake/tacmap_phantom_omni.cmake
+              cmake/tacmap_tbb.cmake
               cmake/FindOpenHaptics.cmake
         DESTINATION "${tacmap_cmake_dir}")
 

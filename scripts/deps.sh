@@ -25,4 +25,4 @@ tacmap_require_packages() {
 }
 
 # Everything the library, its tests, examples and benchmarks build with.
-TACMAP_BUILD_PACKAGES=(cmake make ninja-build g++ libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev libstb-dev libcli11-dev pybind11-dev python3-dev python3-numpy python3-matplotlib doxygen pkgconf libvlfeat-dev)
+TACMAP_BUILD_PACKAGES=(cmake make ninja-build g++ libeigen3-dev libxsimd-dev doctest-dev libbenchmark-dev libstb-dev libcli11-dev pybind11-dev python3-dev python3-numpy python3-matplotlib doxygen pkgconf libvlfeat-dev libtbb-dev)
