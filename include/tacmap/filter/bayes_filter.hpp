@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "tacmap/angle.hpp"
+#include "tacmap/executor/concept.hpp"
 #include "tacmap/filter/detail/position_statistics.hpp"
 #include "tacmap/filter/detail/posterior_kernel.hpp"
 #include "tacmap/filter/detail/support.hpp"
@@ -240,6 +241,13 @@ class bayes_filter {
     tracking_ = params;
   }
   [[nodiscard]] const tracking_params& tracking() const { return tracking_; }
+
+  /// Runs the measurement model's whole-grid operations on the executor `e`
+  /// (tacmap/executor/concept.hpp): `thread_pool_executor`, `tbb_executor` or the user's own,
+  /// which must outlive its use; an empty `executor_ref` goes back to sequential. For models
+  /// that accept one (`descriptor_likelihood::set_executor`: the same values bit for bit).
+  void set_executor(executor_ref e) requires requires(Measurement& m) { m.set_executor(e); }
+  { measurement_.set_executor(e); }
 
   /// Measurement update with a log-likelihood computed elsewhere: a flat array of `size()`
   /// values, or an image of `rows() x cols()` for single-layer grids.

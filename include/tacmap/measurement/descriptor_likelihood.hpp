@@ -44,6 +44,7 @@
 
 #include "tacmap/descriptor/concept.hpp"
 #include "tacmap/detail/memory_budget.hpp"
+#include "tacmap/executor/concept.hpp"
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/measurement/concept.hpp"
@@ -221,6 +222,14 @@ class descriptor_likelihood {
   [[nodiscard]] const Descriptor& descriptor() const { return descriptor_; }
   [[nodiscard]] const descriptor_likelihood_params& params() const { return params_; }
 
+  /// Runs the whole-grid distances on `e` (tacmap/executor/concept.hpp; empty: sequentially, the
+  /// default): per-window features with contrast as_is (the default), split by tiles of window
+  /// descriptors, each computed as the sequential pass computes it — the same values bit for
+  /// bit. Other configurations stay sequential. `e` must outlive its use by this model (and by
+  /// its copies, which share it).
+  void set_executor(executor_ref e) { executor_ = e; }
+  [[nodiscard]] executor_ref executor() const { return executor_; }
+
   /// The M descriptors of a tactile image (dimension x M), in patch order.
   [[nodiscard]] Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> tactile_descriptors(
       const measurement_type& z) const {
@@ -379,6 +388,24 @@ class descriptor_likelihood {
   template <class G>
   void log_likelihood(const G& grid, const measurement_type& z, belief_array<G>& out)
       const requires std::same_as<typename G::scalar_type, scalar_type> {
+    if (executor_ && params_.features == window_features::per_window &&
+        params_.contrast == contrast_sign::as_is) {
+      check_grid(grid);
+      const descriptor_matrix g = in_stored_basis(tactile_descriptors(z));
+      constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
+      // Chunks of 8 tiles (64 states: 256 bytes of float output): no two threads write to one
+      // cache line, and every chunk starts on a SIMD packet boundary of `out`, so that the
+      // vectorised logarithm of eq. (2) splits a chunk as it splits the whole grid.
+      constexpr Eigen::Index chunk = 8;
+      const Eigen::Index tiles = (grid.size() + width - 1) / width;
+      executor_.parallel_for(
+          static_cast<std::size_t>((tiles + chunk - 1) / chunk), [&](std::size_t b, std::size_t e) {
+            log_likelihood_tiles(g, out,
+                                 {static_cast<Eigen::Index>(b) * chunk,
+                                  std::min(static_cast<Eigen::Index>(e) * chunk, tiles)});
+          });
+      return;
+    }
     distances(grid, z, out);
     to_log_likelihood(out);
   }
@@ -411,19 +438,7 @@ class descriptor_likelihood {
     const descriptor_matrix g = in_stored_basis(tactile_descriptors(z));
     constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
     detail::covering_tiles(states, width, grid.size(), tile_ranges_);
-    for (const detail::tile_range& t : tile_ranges_) {
-      // As per_window_distances, on these tiles only: the same kernel, register by register.
-      scalar_type* o = out.data() + t.begin * width;
-      for (Eigen::Index m = 0; m < patches_per_window(); ++m) {
-        const auto& f = per_window_[static_cast<std::size_t>(m)];
-        if (params_.pairs == pairing::all_pairs)
-          accumulate_on(f, g, 0, g.cols(), o, m > 0, t);
-        else
-          accumulate_on(f, g, m, 1, o, m > 0, t);
-      }
-      const state_range p = detail::tile_positions(t, width, grid.size());
-      to_log_likelihood(out.segment(p.begin, p.end - p.begin));
-    }
+    for (const detail::tile_range& t : tile_ranges_) log_likelihood_tiles(g, out, t);
   }
 
   /// Tracking hook of `log_likelihood_both_signs`: blocks 0 and 1 of `out` at (at least) the
@@ -462,6 +477,25 @@ class descriptor_likelihood {
   }
 
  private:
+  // log p(z | x) of the windows in tiles `t` (per-window features, contrast as_is; g: the
+  // touch's descriptors in the stored basis): as per_window_distances then to_log_likelihood, on
+  // these tiles only — the same kernel, register by register, so the same values bit for bit.
+  template <class Array>
+  void log_likelihood_tiles(const descriptor_matrix& g, Array& out,
+                            const detail::tile_range& t) const {
+    constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
+    scalar_type* o = out.data() + t.begin * width;
+    for (Eigen::Index m = 0; m < patches_per_window(); ++m) {
+      const auto& f = per_window_[static_cast<std::size_t>(m)];
+      if (params_.pairs == pairing::all_pairs)
+        accumulate_on(f, g, 0, g.cols(), o, m > 0, t);
+      else
+        accumulate_on(f, g, m, 1, o, m > 0, t);
+    }
+    const state_range p = detail::tile_positions(t, width, out.size());
+    to_log_likelihood(out.segment(p.begin, p.end - p.begin));
+  }
+
   // Descriptors as columns, in the basis the map's descriptors are stored in: the contrast
   // basis with both_signs, else as they are.
   template <class Derived>
@@ -644,6 +678,7 @@ class descriptor_likelihood {
   mutable descriptor_matrix patch_columns_;  // log_likelihood_each: patch m of every image
   detail::contrast_basis basis_;  // both_signs: the basis the map's descriptors are stored in
   mutable std::vector<detail::tile_range> tile_ranges_;  // log_likelihood_on: tiles to stream
+  executor_ref executor_;                                // empty: sequential (set_executor)
 };
 
 // The heavy members, defined out of the class: not inline, so that where tacmap::precompiled
