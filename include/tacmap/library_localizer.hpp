@@ -248,30 +248,15 @@ class library_localizer {
     // Preprocess first: a malformed frame throws before anything changes.
     const preprocessed_frame pre = preprocess(frame, config_.preprocessing);
     library_touch_result r;
-    if (calls_ > 0 && moved) {
-      try {
-        filter_.predict(*moved);
-      } catch (const std::domain_error&) {
-        filter_.reset();  // every state the belief allowed left every map: start again
-        r.restarted = true;
-      }
-    }
+    const std::vector<image<float>> view{pre.pixels};  // one scale: one view for every map
+    const std::optional<update_report> report = detail::predict_and_update(
+        filter_,
+        [&] {
+          if (calls_ > 0 && moved) filter_.predict(*moved);
+        },
+        pre.accepted() ? &view : nullptr, touches_, r.restarted);
     ++calls_;
     r.rejection = pre.rejection;
-    std::optional<update_report> report;
-    if (pre.accepted()) {
-      const std::vector<image<float>> view{pre.pixels};  // one scale: one view for every map
-      try {
-        report = filter_.update(view);
-      } catch (const std::domain_error&) {
-        if (touches_ == 0 && !r.restarted) throw;
-        filter_.reset();
-        r.restarted = true;
-        report = filter_.update(view);
-        report->log_prediction_support = -std::numeric_limits<double>::infinity();
-      }
-      ++touches_;
-    }
     const auto est = filter_.estimate();
     const confidence conf = report ? assess(filter_, est, *report, config_.confidence)
                                    : assess(filter_, est, config_.confidence);

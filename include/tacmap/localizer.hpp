@@ -465,6 +465,39 @@ inline robust_motion_params robust_params(const localizer_config& c) {
       .lost_probability = c.lost(), .wide_probability = c.wide(), .wide_sigma_mm = c.wide_sigma_mm};
 }
 
+/// The filter half of a localizer's touch, shared by `localizer` and `library_localizer`:
+/// `predict()` (the caller's motion step, or nothing), then the update with `z` when the frame
+/// was accepted (`z` not null), counting it in `touches`. Without the motion floor
+/// (lost_probability = 0) the motion can carry every state the belief allowed off the map, and
+/// a touch can rule out every state the prediction still allowed: the filter (a
+/// std::domain_error) then starts again from uniform, as a user would, and `restarted` says so;
+/// the restarted update's `log_prediction_support` is -inf (the prediction had no support). From
+/// a uniform belief the update cannot fail that way unless the model itself failed: rethrown.
+template <class Filter, class Predict, class Measurement>
+std::optional<update_report> predict_and_update(Filter& filter, Predict&& predict,
+                                                const Measurement* z, std::size_t& touches,
+                                                bool& restarted) {
+  try {
+    std::forward<Predict>(predict)();
+  } catch (const std::domain_error&) {
+    filter.reset();
+    restarted = true;
+  }
+  if (z == nullptr) return std::nullopt;
+  std::optional<update_report> report;
+  try {
+    report = filter.update(*z);
+  } catch (const std::domain_error&) {
+    if (touches == 0 && !restarted) throw;
+    filter.reset();
+    restarted = true;
+    report = filter.update(*z);
+    report->log_prediction_support = -std::numeric_limits<double>::infinity();
+  }
+  ++touches;
+  return report;
+}
+
 }  // namespace detail
 
 /// The planar filter `config` describes for `map` (intensities) at `mm_per_px`, with a sensor
@@ -749,35 +782,17 @@ class localizer {
   void run(Filter& filter, const preprocessed_frame& pre,
            const std::optional<sensor_odometry>& moved, touch_result& r) {
     constexpr bool pose = Filter::grid_type::dimension == 3;
-    if (calls_ > 0 && moved) {
-      try {
-        if constexpr (pose)
-          filter.predict(*moved);
-        else
-          filter.predict(odometry{.dx_mm = moved->du_mm, .dy_mm = moved->dv_mm});
-      } catch (const std::domain_error&) {
-        // The motion carried every state the belief allowed off the map (possible without the
-        // motion floor, lost_probability = 0): start again, as a user would.
-        filter.reset();
-        r.restarted = true;
-      }
-    }
+    const std::optional<update_report> report = detail::predict_and_update(
+        filter,
+        [&] {
+          if (calls_ == 0 || !moved) return;
+          if constexpr (pose)
+            filter.predict(*moved);
+          else
+            filter.predict(odometry{.dx_mm = moved->du_mm, .dy_mm = moved->dv_mm});
+        },
+        pre.accepted() ? &pre.pixels : nullptr, touches_, r.restarted);
     r.rejection = pre.rejection;
-    std::optional<update_report> report;
-    if (pre.accepted()) {
-      try {
-        report = filter.update(pre.pixels);
-      } catch (const std::domain_error&) {
-        // The touch ruled out every state the belief still allowed (possible without the
-        // floor). From a uniform belief it cannot (unless the model itself failed: rethrown).
-        if (touches_ == 0 && !r.restarted) throw;
-        filter.reset();
-        r.restarted = true;
-        report = filter.update(pre.pixels);
-        report->log_prediction_support = -std::numeric_limits<double>::infinity();
-      }
-      ++touches_;
-    }
     const auto est = filter.estimate();
     const confidence conf = report ? assess(filter, est, *report, config_.confidence)
                                    : assess(filter, est, config_.confidence);

@@ -75,6 +75,32 @@ TEST_CASE("library_localizer: touches on the gecko recognise it among other maps
   CHECK(loc.filter().estimate().object_probability[0] == doctest::Approx(1.0 / 3.0));
 }
 
+TEST_CASE("library_localizer: a move off every map restarts the paper's configuration") {
+  // No motion floor: a 1 m move carries every state off every map, which the filter reports as
+  // a std::domain_error; the localizer starts again from each object's prior instead.
+  const auto& p = tacmap_test::gecko();
+  auto config = tacmap::localizer_config::paper();
+  config.features = tacmap::window_features::shared_dense;
+  tacmap::library_localizer loc(gecko_library(), config);
+  tacmap::tactile_simulator sim(p.relief_mm(), p.map_size(), p.mm_per_px, {.seed = 9});
+  const auto frame = sim.render(p.locations[0].pose());
+  CHECK_FALSE(loc.touch(frame).restarted);
+  const auto r = loc.touch(frame, tacmap::odometry{.dx_mm = 1000.0, .dy_mm = 0.0});
+  CHECK(r.restarted);
+  CHECK(r.touches == 2);
+  // Restarted before the update: the touch is weighed against the prior, which supports it.
+  CHECK(r.log_prediction_support <= 0.0);
+  CHECK(r.log_prediction_support > -1.0);
+  double sum = 0.0;
+  for (const double q : r.object_probability) {
+    CHECK(std::isfinite(q));
+    sum += q;
+  }
+  CHECK(sum == doctest::Approx(1.0).epsilon(1e-5));
+  CHECK(static_cast<double>(loc.object_belief_image(r.object).sum()) ==
+        doctest::Approx(1.0).epsilon(1e-4));
+}
+
 TEST_CASE("library_localizer: bad libraries and touches are refused with the reason") {
   using tacmap_test::message_of;
   const auto& p = tacmap_test::gecko();

@@ -102,9 +102,9 @@ class robust_motion {
       for (Eigen::Index at = 0; at < out.size(); at += plane) {
         Eigen::Map<image<scalar>> img(out.data() + at, rows, cols);
         down_ = img.template cast<double>();
-        box3_down(down_, scratch_, ry);  // along y
+        box3_down(down_, scratch_, row_sum_, ry);  // along y
         across_ = down_.transpose();
-        box3_down(across_, scratch_, rx);  // along x
+        box3_down(across_, scratch_, row_sum_, rx);  // along x
         img = img * keep + (across_.transpose() * w).template cast<scalar>();
       }
       out /= out.sum();
@@ -129,12 +129,14 @@ class robust_motion {
 
   // Three box passes of radius r down the columns of `a` (zero outside), `b` as scratch: each
   // output row is the mean of the 2 r + 1 input rows around it, kept as a running sum of whole
-  // rows. Clamped at 0: the running sum's rounding must not make a state negative.
-  static void box3_down(image<double>& a, image<double>& b, Eigen::Index r) {
+  // rows (`sum`, reused: no allocation per prediction). Clamped at 0: the running sum's rounding
+  // must not make a state negative.
+  static void box3_down(image<double>& a, image<double>& b, std::vector<double>& sum,
+                        Eigen::Index r) {
     const Eigen::Index rows = a.rows(), cols = a.cols();
     b.resize(rows, cols);
     const double norm = 1.0 / static_cast<double>(2 * r + 1);
-    std::vector<double> sum(static_cast<std::size_t>(cols));
+    sum.resize(static_cast<std::size_t>(cols));
     double* s = sum.data();
     // Plain loops over contiguous rows (the compiler vectorises them): rows are short (~100),
     // and an Eigen expression per row costs more than its arithmetic.
@@ -168,8 +170,9 @@ class robust_motion {
   M base_;
   robust_motion_params params_;
   // Scratch of the wide component (reused between predictions): a plane, its transpose, and
-  // the passes' other buffer.
+  // the passes' other buffer, the running sum of rows.
   mutable image<double> down_, across_, scratch_;
+  mutable std::vector<double> row_sum_;
 };
 
 }  // namespace tacmap
