@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
@@ -448,5 +449,29 @@ TEST_CASE("rotated likelihood: bad input is rejected with a clear message") {
             (void)rotated_descriptor_likelihood<sift_lite>(
                 sift_lite{}, map64(), {.width = 18, .height = 42}, 4, {.spacing = 0});
           }).find("spacing = 0") != std::string::npos);
+  }
+}
+
+TEST_CASE(
+    "rotated likelihood: a map whose field cannot fit in memory is refused before allocating") {
+  // 8000 x 8000 px (256 MB as floats): classic SIFT's dense field and its tiled copy would take
+  // 2 x 64 million x 128 floats, about 65 GB, whatever the number of headings.
+  const tacmap::image<float> map = tacmap::image<float>::Constant(8000, 8000, 0.5F);
+  const tacmap::pixel_size window{.width = 18, .height = 42};
+  const std::uint64_t field = (8000ULL - 42 + 1) * (8000ULL - 42 + 1);  // at least (patch <= 42)
+  const std::uint64_t needed = 2 * field * 128 * sizeof(float);
+  const auto available = tacmap::available_memory_bytes();
+  if (!available || *available >= needed) return;  // a machine that could hold it
+  try {
+    const tacmap::rotated_descriptor_likelihood<tacmap::classic_sift> model({}, map, window, 36);
+    FAIL("expected insufficient_memory");
+  } catch (const tacmap::insufficient_memory& e) {
+    CHECK(e.needed_bytes >= needed);
+    CHECK(e.available_bytes < e.needed_bytes);
+    const std::string m = e.what();
+    CHECK(m.find("rotated_descriptor_likelihood") != std::string::npos);
+    CHECK(m.find("dense descriptors") != std::string::npos);
+    CHECK(m.find("GB") != std::string::npos);
+    CHECK(m.find("coarser map") != std::string::npos);
   }
 }

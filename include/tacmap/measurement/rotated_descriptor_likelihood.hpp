@@ -31,6 +31,7 @@
 #include <cstdint>
 #include <limits>
 #include <span>
+#include <sstream>
 #include <utility>
 #include <vector>
 
@@ -115,6 +116,19 @@ class rotated_descriptor_likelihood {
     const std::vector<grid_cell> offsets = detail::checked_patch_offsets(
         "rotated_descriptor_likelihood", map, window, p, params.spacing);
     m_count_ = static_cast<Eigen::Index>(offsets.size());
+    {
+      // Refused before allocating (issue 14, "Bad input"), as descriptor_likelihood: the dense
+      // field and its tiled copy, whatever the number of headings (the tactile image turns, the
+      // map's features do not) — about 300 MB for classic SIFT on 640 x 480.
+      const auto dim = static_cast<std::uint64_t>(descriptor_.dimension());
+      const auto field_count = detail::saturating_product(map.rows() - p + 1, map.cols() - p + 1);
+      std::ostringstream what;
+      what << "the map's dense descriptors (" << field_count << " x " << dim << " values, twice)";
+      detail::check_memory("rotated_descriptor_likelihood", what.str(),
+                           detail::saturating_product(2, field_count, dim, sizeof(scalar_type)),
+                           "use a coarser map (fewer mm per px means more states) or a machine "
+                           "with more memory");
+    }
 
     const image<scalar_type> map_t = map.template cast<scalar_type>();
     const descriptor_field<scalar_type> field = descriptor_.compute(map_t);
