@@ -4,6 +4,12 @@
 // since preparing 640 x 480 for the default model takes seconds and ~420 MB per filter.
 //
 //   TACMAP_BENCH_MAP=640x480 build/release/bench/tacmap_tracking_bench --benchmark_repetitions=5
+//
+// The first touch also runs on 2 threads (issue 14, item 5): thread_pool_executor and, where
+// tacmap::tbb exists, oneTBB — the same filter, so the ratios are of one run:
+//   TACMAP_BENCH_MAP=640x480 build/release/bench/tacmap_tracking_bench
+//     --benchmark_filter=first_touch --benchmark_repetitions=9
+//     --benchmark_enable_random_interleaving=true
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
@@ -12,11 +18,15 @@
 
 #include "bench_maps.hpp"
 #include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/executor/thread_pool.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/localizer.hpp"
 #include "tacmap/measurement/descriptor_likelihood.hpp"
 #include "tacmap/motion/odometry_gaussian.hpp"
+#ifdef TACMAP_BENCH_TBB
+#include "tacmap/executor/tbb_executor.hpp"
+#endif
 
 namespace {
 
@@ -148,6 +158,24 @@ void localized_part(benchmark::State& state, Filter& f, bool update_only) {
 }
 
 void plain_first_touch(benchmark::State& state) { first_touch(state, plain()); }
+// The first touch with the whole-grid likelihood on an executor of 2 threads (the caller and
+// one more), owned here as a user would own it.
+template <class Executor>
+void first_touch_on(benchmark::State& state, Executor& e) {
+  plain().set_executor(e);
+  first_touch(state, plain());
+  plain().set_executor({});
+}
+void plain_first_touch_2_threads(benchmark::State& state) {
+  tacmap::thread_pool_executor pool(2);
+  first_touch_on(state, pool);
+}
+#ifdef TACMAP_BENCH_TBB
+void plain_first_touch_tbb_2_threads(benchmark::State& state) {
+  tacmap::tbb_executor tbb(2);
+  first_touch_on(state, tbb);
+}
+#endif
 void plain_predict(benchmark::State& state) { localized_part(state, plain(), false); }
 void plain_update_tracked(benchmark::State& state) { localized_part(state, plain(), true); }
 void plain_touch_full(benchmark::State& state) { localized_touch(state, plain(), false); }
@@ -165,6 +193,10 @@ void default_filter_touch_tracking_on(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(plain_first_touch)->Unit(benchmark::kMillisecond);
+BENCHMARK(plain_first_touch_2_threads)->Unit(benchmark::kMillisecond);
+#ifdef TACMAP_BENCH_TBB
+BENCHMARK(plain_first_touch_tbb_2_threads)->Unit(benchmark::kMillisecond);
+#endif
 BENCHMARK(plain_touch_full)->Unit(benchmark::kMicrosecond);
 BENCHMARK(plain_touch_tracked)->Unit(benchmark::kMicrosecond);
 BENCHMARK(plain_predict)->Unit(benchmark::kMicrosecond);

@@ -1,0 +1,195 @@
+// The scaling table (issue 14, item 6): preparing a map and one touch, from the paper's 120 px
+// map to a camera's 640 x 480, in the plane and with 36 headings, in one run.
+//
+//  * planar: the default model (classic_sift, per window, aligned, exponential) with the
+//    Gaussian odometry model — what `bayes_filter` gives by default. One touch: the first touch
+//    (the whole grid, from a uniform belief), the same on 2 threads (thread_pool_executor), and
+//    a touch once localized with tracking mode on (issue 14, item 3).
+//  * 36 headings: rotated_descriptor_likelihood<classic_sift> over a pose grid, the model the
+//    localizer runs for unknown headings: the map's dense field is shared by every heading and
+//    window (per-window descriptors for every heading would need 36 x 3 x 128 floats per
+//    position, 15 GB at 640 x 480). It has no tracking hook: every touch is a full update.
+//
+// Only the 120 x 120 rows run by default (the CTest smoke run stays cheap); the others need
+// about 1 GB and seconds each:
+//   TACMAP_BENCH_SCALING=1 build/release/bench/tacmap_scaling_bench --benchmark_repetitions=3
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <map>
+#include <memory>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "bench_maps.hpp"
+#include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/executor/thread_pool.hpp"
+#include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/grid/planar_grid.hpp"
+#include "tacmap/grid/pose_grid.hpp"
+#include "tacmap/measurement/descriptor_likelihood.hpp"
+#include "tacmap/measurement/rotated_descriptor_likelihood.hpp"
+#include "tacmap/motion/odometry_gaussian.hpp"
+#include "tacmap/motion/pose_odometry_gaussian.hpp"
+
+namespace {
+
+constexpr double mm_per_px = 0.2;
+constexpr tacmap::pixel_size window{.width = 18, .height = 42};
+constexpr int headings = 36;
+
+using planar_model = tacmap::descriptor_likelihood<tacmap::classic_sift>;
+using pose_model = tacmap::rotated_descriptor_likelihood<tacmap::classic_sift>;
+using planar_filter =
+    tacmap::bayes_filter<tacmap::planar_grid<float>, tacmap::odometry_gaussian, planar_model>;
+using pose_filter =
+    tacmap::bayes_filter<tacmap::pose_grid<float>, tacmap::pose_odometry_gaussian, pose_model>;
+
+const tacmap::image<float>& map_of(Eigen::Index cols, Eigen::Index rows) {
+  static std::map<std::pair<Eigen::Index, Eigen::Index>, tacmap::image<float>> maps;
+  auto it = maps.find({cols, rows});
+  if (it == maps.end())
+    it = maps.emplace(std::pair{cols, rows}, tacmap_bench::bench_map(rows, cols)).first;
+  return it->second;
+}
+
+tacmap::planar_grid<float> planar_grid_of(const tacmap::image<float>& map) {
+  return {{.width = map.cols(), .height = map.rows()}, mm_per_px, window};
+}
+
+// One filter per map size, built once (the touches reuse it; preparation is timed on its own).
+// Only the most recently used one is kept: 640 x 480 per window takes about 0.5 GB.
+template <class Filter, class Make>
+Filter& cached(Eigen::Index cols, Eigen::Index rows, Make make) {
+  static std::unique_ptr<Filter> filter;
+  static std::pair<Eigen::Index, Eigen::Index> size{0, 0};
+  if (!filter || size != std::pair{cols, rows}) {
+    filter.reset();
+    filter = std::make_unique<Filter>(make(map_of(cols, rows)));
+    size = {cols, rows};
+  }
+  return *filter;
+}
+
+planar_filter& planar(Eigen::Index cols, Eigen::Index rows) {
+  return cached<planar_filter>(cols, rows, [](const tacmap::image<float>& map) {
+    return planar_filter(planar_grid_of(map), tacmap::odometry_gaussian({.sigma_mm = 1.0, .k = 8}),
+                         planar_model({}, map, window));
+  });
+}
+
+pose_filter& pose(Eigen::Index cols, Eigen::Index rows) {
+  return cached<pose_filter>(cols, rows, [](const tacmap::image<float>& map) {
+    const tacmap::pose_grid<float> grid(planar_grid_of(map), headings);
+    return pose_filter(grid, tacmap::pose_odometry_gaussian{}, pose_model({}, map, grid));
+  });
+}
+
+// The window `dc` px right of the map's centre.
+tacmap::image<float> cut(const tacmap::image<float>& map, Eigen::Index dc = 0) {
+  return map.block(map.rows() / 2 - window.height / 2, map.cols() / 2 + dc, window.height,
+                   window.width);
+}
+
+void planar_prepare(benchmark::State& state, Eigen::Index cols, Eigen::Index rows) {
+  const auto& map = map_of(cols, rows);
+  for (auto _ : state) {
+    const planar_model model({}, map, window);
+    benchmark::DoNotOptimize(&model);
+  }
+  state.counters["states"] = static_cast<double>(planar_grid_of(map).size());
+}
+
+void pose_prepare(benchmark::State& state, Eigen::Index cols, Eigen::Index rows) {
+  const auto& map = map_of(cols, rows);
+  for (auto _ : state) {
+    const pose_model model({}, map, window, headings);
+    benchmark::DoNotOptimize(&model);
+  }
+  state.counters["states"] = static_cast<double>(planar_grid_of(map).size() * headings);
+}
+
+template <class Filter>
+void time_first_touch(benchmark::State& state, Filter& f, const tacmap::image<float>& map) {
+  const auto z = cut(map);
+  for (auto _ : state) {
+    state.PauseTiming();
+    f.reset();
+    state.ResumeTiming();
+    f.update(z);
+    benchmark::DoNotOptimize(f.belief().data());
+  }
+  state.counters["states"] = static_cast<double>(f.grid().size());
+}
+
+void planar_first_touch(benchmark::State& state, Eigen::Index cols, Eigen::Index rows) {
+  time_first_touch(state, planar(cols, rows), map_of(cols, rows));
+}
+
+void planar_first_touch_2_threads(benchmark::State& state, Eigen::Index cols, Eigen::Index rows) {
+  tacmap::thread_pool_executor pool(2);
+  auto& f = planar(cols, rows);
+  f.set_executor(pool);
+  time_first_touch(state, f, map_of(cols, rows));
+  f.set_executor({});
+}
+
+void pose_first_touch(benchmark::State& state, Eigen::Index cols, Eigen::Index rows) {
+  time_first_touch(state, pose(cols, rows), map_of(cols, rows));
+}
+
+// A touch once localized (three full updates at the centre first): predict 4 px right or back,
+// update with the window there, tracking mode on (epsilon 1e-6).
+void planar_tracked_touch(benchmark::State& state, Eigen::Index cols, Eigen::Index rows) {
+  auto& f = planar(cols, rows);
+  const auto& map = map_of(cols, rows);
+  f.set_tracking({});
+  f.reset();
+  for (int k = 0; k < 3; ++k) f.update(cut(map));
+  f.set_tracking({.epsilon = 1e-6});
+  const auto a = cut(map), b = cut(map, 4);
+  const tacmap::odometry there{.dx_mm = 4 * mm_per_px}, back{.dx_mm = -4 * mm_per_px};
+  bool at_a = true;
+  double tracked = 0.0, touches = 0.0;
+  for (auto _ : state) {
+    f.predict(at_a ? there : back);
+    const tacmap::update_report r = f.update(at_a ? b : a);
+    at_a = !at_a;
+    tracked += r.path == tacmap::update_path::tracked ? 1.0 : 0.0;
+    touches += 1.0;
+    benchmark::DoNotOptimize(f.belief().data());
+  }
+  state.counters["tracked"] = tracked / touches;
+  f.set_tracking({});
+}
+
+// Registered at start-up: 120 x 120 always, the larger maps with TACMAP_BENCH_SCALING set.
+[[maybe_unused]] const int registered = [] {
+  std::vector<std::pair<Eigen::Index, Eigen::Index>> sizes{{120, 120}};
+  if (std::getenv("TACMAP_BENCH_SCALING") != nullptr)
+    sizes.insert(sizes.end(), {{240, 240}, {320, 240}, {640, 480}});
+  using fn = void (*)(benchmark::State&, Eigen::Index, Eigen::Index);
+  const std::tuple<const char*, fn, benchmark::TimeUnit> cases[] = {
+      {"planar_prepare", planar_prepare, benchmark::kMillisecond},
+      {"planar_first_touch", planar_first_touch, benchmark::kMicrosecond},
+      {"planar_first_touch_2_threads", planar_first_touch_2_threads, benchmark::kMicrosecond},
+      {"planar_tracked_touch", planar_tracked_touch, benchmark::kMicrosecond},
+      {"pose36_prepare", pose_prepare, benchmark::kMillisecond},
+      {"pose36_touch", pose_first_touch, benchmark::kMicrosecond},
+  };
+  // Size by size, so that each size's filters are built once.
+  for (const auto& [cols, rows] : sizes)
+    for (const auto& [name, f, unit] : cases) {
+      const std::string label =
+          std::string(name) + "/" + std::to_string(cols) + "x" + std::to_string(rows);
+      benchmark::RegisterBenchmark(label.c_str(), [f = f, cols = cols,
+                                                   rows = rows](benchmark::State& s) {
+        f(s, cols, rows);
+      })->Unit(unit);
+    }
+  return 0;
+}();
+
+}  // namespace
