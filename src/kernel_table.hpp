@@ -5,6 +5,7 @@
 #include "tacmap/detail/weighted_sum.hpp"
 #include "tacmap/filter/detail/posterior_kernel.hpp"
 #include "tacmap/measurement/detail/distance_kernel.hpp"
+#include "tacmap/measurement/detail/quantized_kernel.hpp"
 #include "tacmap/simd.hpp"
 
 namespace tacmap::detail {
@@ -20,7 +21,8 @@ constexpr precompiled_kernels make_kernels(simd_level level) {
           &weight_by_likelihood_simd<A, float>,
           &weighted_sum_simd<A, float>,
           &accumulate_sign_pair_tiles_simd<A, float>,
-          &accumulate_distances_tiles_simd<A, float>};
+          &accumulate_distances_tiles_simd<A, float>,
+          &quantized_distances_simd<A>};
 }
 
 /// The AVX2 + FMA table (src/simd_avx2.cpp, compiled with -mavx2 -mfma).

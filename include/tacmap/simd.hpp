@@ -69,6 +69,8 @@ struct log_likelihood_scan;
 struct weight_sums;
 struct position_range;
 struct tile_range;
+class quantized_tiles;
+struct quantized_query;
 
 /// The float kernels of one instruction set in tacmap::precompiled (src/simd_*.cpp): the same
 /// templates as the header-only kernels, instantiated for that architecture.
@@ -95,6 +97,9 @@ struct precompiled_kernels {
   void (*accumulate_distances_tiles)(const descriptor_tiles<float>& f, const Eigen::ArrayXXf& g,
                                      Eigen::Index first, Eigen::Index count, float* out, bool add,
                                      tile_range range);
+  /// Distances to descriptors stored as 7-bit integers (quantized_kernel.hpp; issue 14).
+  void (*quantized_distances)(const quantized_tiles& f, const quantized_query& g,
+                              float* const* out, bool sum, bool add, tile_range range);
 };
 
 // Defined in tacmap::precompiled (src/simd_dispatch.cpp); declared for every translation unit,

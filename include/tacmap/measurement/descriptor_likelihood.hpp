@@ -49,6 +49,7 @@
 #include "tacmap/image.hpp"
 #include "tacmap/measurement/concept.hpp"
 #include "tacmap/measurement/detail/distance_kernel.hpp"
+#include "tacmap/measurement/detail/quantized_kernel.hpp"
 #include "tacmap/measurement/detail/state_ranges.hpp"
 
 namespace tacmap {
@@ -91,6 +92,19 @@ enum class contrast_sign {
   either_per_patch,
 };
 
+/// How the per-window descriptors are stored (issue 14).
+enum class descriptor_storage {
+  /// As computed, in the descriptor's scalar type: the paper's.
+  float32,
+  /// 7-bit integers, round(254 v) in [0, 127] (measurement/detail/quantized_kernel.hpp), the
+  /// touch's descriptors quantised alike, distances from exact integer dot products: a quarter
+  /// of the bytes a touch streams. Elements above 0.5 are clamped at 127 (counted:
+  /// `quantization_clamped()`); a negative element is refused at preparation. Applies to
+  /// per-window features of a Euclidean descriptor (dense_sift); other configurations keep
+  /// float32 (`stores_quantized()` tells).
+  int8,
+};
+
 /// Configuration of `descriptor_likelihood`. The defaults are the best configuration measured
 /// with tacmap-evaluate (README, "Localization results": aligned pairs with an exponential
 /// likelihood beat the paper's all-pairs / inverse choice on every map and descriptor);
@@ -114,12 +128,16 @@ struct descriptor_likelihood_params {
   /// matched with the multiply-adds of one (distances are unchanged by the basis). Needs a
   /// descriptor with a contrast permutation (dense_sift), aligned pairing and contrast as_is.
   bool both_signs = false;
+  /// How the per-window descriptors are stored. paper: float32.
+  descriptor_storage storage = descriptor_storage::float32;
 
-  /// The paper's configuration: all pairs (eq. (1)), inverse likelihood (eq. (2)), per window.
+  /// The paper's configuration: all pairs (eq. (1)), inverse likelihood (eq. (2)), per window,
+  /// float descriptors.
   [[nodiscard]] static descriptor_likelihood_params paper() {
     descriptor_likelihood_params p;
     p.pairs = pairing::all_pairs;
     p.shape = likelihood_shape::inverse;
+    p.storage = descriptor_storage::float32;
     return p;
   }
 
@@ -221,6 +239,20 @@ class descriptor_likelihood {
   [[nodiscard]] const descriptor_field<scalar_type>& map_descriptors() const { return field_; }
   [[nodiscard]] const Descriptor& descriptor() const { return descriptor_; }
   [[nodiscard]] const descriptor_likelihood_params& params() const { return params_; }
+  /// True when the per-window descriptors are stored as 7-bit integers
+  /// (`descriptor_storage::int8` where it applies).
+  [[nodiscard]] bool stores_quantized() const { return quantized_; }
+  /// Elements of the map's per-window descriptors clamped at 127 when they were quantised
+  /// (values above 0.5; 0 with float storage).
+  [[nodiscard]] std::uint64_t quantization_clamped() const { return clamped_; }
+  /// Elements of the touch z's descriptors that quantisation clamps (the same range as the
+  /// map's; 0 with float storage): the touch side of `quantization_clamped()`, on demand.
+  [[nodiscard]] std::uint64_t quantization_clamped(const measurement_type& z) const {
+    if (!quantized_) return 0;
+    detail::quantized_query q;
+    q.assign(tactile_descriptors(z));
+    return q.clamped;
+  }
 
   /// Runs the whole-grid distances on `e` (tacmap/executor/concept.hpp; empty: sequentially, the
   /// default): per-window features with contrast as_is (the default), split by tiles of window
@@ -359,14 +391,21 @@ class descriptor_likelihood {
     check_grid(grid);
     const Eigen::Index n = grid.size();
     const Eigen::Index m_count = patches_per_window();
+    if (quantized_) {
+      quantized_both_signs(sign_queries(z), out, out + n, detail::tile_range{});
+      for (Eigen::Index sign = 0; sign < 2; ++sign)
+        to_log_likelihood(
+            Eigen::Map<Eigen::Array<scalar_type, Eigen::Dynamic, 1>>(out + sign * n, n));
+      return;
+    }
     const descriptor_matrix g = in_stored_basis(tactile_descriptors(z));
     const Eigen::Index half = basis_.half();
     scalar_type* plus = out;
     scalar_type* minus = out + n;
     if (params_.features == window_features::per_window) {
       for (Eigen::Index m = 0; m < m_count; ++m)
-        detail::accumulate_sign_pair(per_window_[static_cast<std::size_t>(m)], &g(0, m), half, plus,
-                                     minus, m > 0);
+        detail::accumulate_sign_pair(per_window_[static_cast<std::size_t>(m)].values, &g(0, m),
+                                     half, plus, minus, m > 0);
     } else {
       // Per patch, both signs' distances over the dense field (columns m and M + m), then each
       // sign's windows as sums of shifted columns.
@@ -459,16 +498,22 @@ class descriptor_likelihood {
     detail::check_tactile_image("descriptor_likelihood", z, window_);
     check_grid(grid);
     const Eigen::Index n = grid.size();
-    const descriptor_matrix g = in_stored_basis(tactile_descriptors(z));
+    const descriptor_matrix g =
+        quantized_ ? descriptor_matrix() : in_stored_basis(tactile_descriptors(z));
+    const std::vector<detail::quantized_query> q =
+        quantized_ ? sign_queries(z) : std::vector<detail::quantized_query>();
     const Eigen::Index half = basis_.half();
     constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
     detail::covering_tiles(states, width, n, tile_ranges_);
     for (const detail::tile_range& t : tile_ranges_) {
       scalar_type* plus = out + t.begin * width;
       scalar_type* minus = out + n + t.begin * width;
-      for (Eigen::Index m = 0; m < patches_per_window(); ++m)
-        detail::accumulate_sign_pair_tiles(per_window_[static_cast<std::size_t>(m)], &g(0, m), half,
-                                           plus, minus, m > 0, t);
+      if (quantized_)
+        quantized_both_signs(q, plus, minus, t);
+      else
+        for (Eigen::Index m = 0; m < patches_per_window(); ++m)
+          detail::accumulate_sign_pair_tiles(per_window_[static_cast<std::size_t>(m)].values,
+                                             &g(0, m), half, plus, minus, m > 0, t);
       const state_range p = detail::tile_positions(t, width, n);
       for (Eigen::Index sign = 0; sign < 2; ++sign)
         to_log_likelihood(Eigen::Map<Eigen::Array<scalar_type, Eigen::Dynamic, 1>>(
@@ -496,12 +541,91 @@ class descriptor_likelihood {
     to_log_likelihood(out.segment(p.begin, p.end - p.begin));
   }
 
+  // Patch m of every window: as floats (descriptor_tiles) or, with `descriptor_storage::int8`,
+  // as 7-bit integers; the overloads of accumulate, accumulate_on and distance_columns below
+  // take either.
+  struct window_patch {
+    detail::descriptor_tiles<scalar_type> values;
+    detail::quantized_tiles quantized;
+  };
+  static_assert(detail::quantized_tiles::width == detail::descriptor_tiles<float>::width,
+                "tile ranges of the window descriptors mean the same states in both storages");
+
+  // Quantised storage with both_signs: per patch m, the touch's patch m and its inversion (the
+  // descriptor's contrast permutation of it: what describing max + min - z gives), quantised.
+  // The map stays in its own basis: the sum/difference basis has negative elements, the
+  // permutation costs a second multiply-add per byte instead.
+  [[nodiscard]] std::vector<detail::quantized_query> sign_queries(const measurement_type& z) const {
+    const descriptor_matrix g = tactile_descriptors(z);
+    std::vector<detail::quantized_query> q(static_cast<std::size_t>(g.cols()));
+    descriptor_matrix pair(g.rows(), 2);
+    for (Eigen::Index m = 0; m < g.cols(); ++m) {
+      pair.col(0) = g.col(m);
+      for (Eigen::Index k = 0; k < g.rows(); ++k)
+        pair(k, 1) = g(permutation_[static_cast<std::size_t>(k)], m);
+      q[static_cast<std::size_t>(m)].assign(pair);
+    }
+    return q;
+  }
+
+  // plus(q) (+)= || F_m(q) - g_m ||, minus(q) (+)= || F_m(q) - P g_m || summed over patches m,
+  // on the tiles `t` (outputs relative to its first position).
+  void quantized_both_signs(const std::vector<detail::quantized_query>& q, scalar_type* plus,
+                            scalar_type* minus, const detail::tile_range& t) const {
+    if constexpr (std::is_same_v<scalar_type, float>) {
+      float* const outs[2] = {plus, minus};
+      for (Eigen::Index m = 0; m < patches_per_window(); ++m)
+        detail::quantized_distances(per_window_[static_cast<std::size_t>(m)].quantized,
+                                    q[static_cast<std::size_t>(m)], outs, false, m > 0, t);
+    }
+  }
+
+  // Distances of the columns [first, first + count) of g to the quantised patches `f`: summed
+  // into out (all of them) or one output column each (`each`: out + j * stride).
+  void quantized_accumulate(const detail::quantized_tiles& f, const descriptor_matrix& g,
+                            Eigen::Index first, Eigen::Index count, scalar_type* out,
+                            Eigen::Index stride, bool sum, bool add,
+                            const detail::tile_range& t) const {
+    if constexpr (std::is_same_v<scalar_type, float>) {
+      // Quantised per call (a few hundred elements, next to the 8,000 windows' pass).
+      detail::quantized_query q;
+      q.assign(g.middleCols(first, count));
+      std::vector<float*> outs(static_cast<std::size_t>(sum ? 1 : count));
+      for (std::size_t j = 0; j < outs.size(); ++j)
+        outs[j] = out + static_cast<Eigen::Index>(j) * stride;
+      detail::quantized_distances(f, q, outs.data(), sum, add, t);
+    }
+  }
+
+  void accumulate(const window_patch& f, const descriptor_matrix& g, Eigen::Index first,
+                  Eigen::Index count, scalar_type* out, bool add) const {
+    if (quantized_)
+      quantized_accumulate(f.quantized, g, first, count, out, 0, true, add, {});
+    else
+      accumulate(f.values, g, first, count, out, add);
+  }
+  void accumulate_on(const window_patch& f, const descriptor_matrix& g, Eigen::Index first,
+                     Eigen::Index count, scalar_type* out, bool add,
+                     const detail::tile_range& t) const {
+    if (quantized_)
+      quantized_accumulate(f.quantized, g, first, count, out, 0, true, add, t);
+    else
+      accumulate_on(f.values, g, first, count, out, add, t);
+  }
+  void distance_columns(const window_patch& f, const descriptor_matrix& g,
+                        descriptor_matrix& dist) const {
+    if (quantized_)
+      quantized_accumulate(f.quantized, g, 0, g.cols(), dist.data(), dist.rows(), false, false, {});
+    else
+      distance_columns(f.values, g, dist);
+  }
+
   // Descriptors as columns, in the basis the map's descriptors are stored in: the contrast
-  // basis with both_signs, else as they are.
+  // basis with both_signs (float storage), else as they are.
   template <class Derived>
   [[nodiscard]] descriptor_matrix in_stored_basis(const Eigen::DenseBase<Derived>& columns) const {
     descriptor_matrix out = columns;
-    if (params_.both_signs)
+    if (params_.both_signs && !quantized_)
       for (Eigen::Index j = 0; j < out.cols(); ++j) basis_.apply(columns.col(j), out.col(j));
     return out;
   }
@@ -666,8 +790,11 @@ class descriptor_likelihood {
   Eigen::Index rows_ = 0;  // states down
   Eigen::Index cols_ = 0;  // states across
   descriptor_field<scalar_type> field_;
-  detail::descriptor_tiles<scalar_type> field_tiles_;              // field_, tiled for the kernel
-  std::vector<detail::descriptor_tiles<scalar_type>> per_window_;  // patch m of every window
+  detail::descriptor_tiles<scalar_type> field_tiles_;  // field_, tiled for the kernel
+  std::vector<window_patch> per_window_;               // patch m of every window
+  bool quantized_ = false;                             // descriptor_storage::int8 applies
+  std::uint64_t clamped_ = 0;                          // map elements clamped by quantisation
+  std::vector<Eigen::Index> permutation_;  // quantised both_signs: the contrast permutation
   // Per-touch distances, kept between calls so that log_likelihood() does not allocate. This
   // makes one model object non-reentrant: give each thread its own filter.
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> workspace_;
@@ -696,6 +823,9 @@ descriptor_likelihood<Descriptor>::descriptor_likelihood(Descriptor descriptor,
   params.validate();
   const Eigen::Index p = descriptor_.patch_size();
   offsets_ = detail::checked_patch_offsets("descriptor_likelihood", map, window, p, params.spacing);
+  if constexpr (euclidean_descriptor<Descriptor> && std::is_same_v<scalar_type, float>)
+    quantized_ = params.storage == descriptor_storage::int8 &&
+                 params.features == window_features::per_window;
   {
     // Refused before allocating (issue 14, "Bad input"): the dense field and its tiled copy,
     // and per window M descriptors of every window — 1.4 GB for classic SIFT on 640 x 480.
@@ -706,9 +836,11 @@ descriptor_likelihood<Descriptor>::descriptor_likelihood(Descriptor descriptor,
     const std::uint64_t field_bytes =
         detail::saturating_product(2, field_count, dim, sizeof(scalar_type));
     const std::uint64_t window_bytes =
-        params.features == window_features::per_window
-            ? detail::saturating_product(windows, offsets_.size(), dim, sizeof(scalar_type))
-            : 0;
+        params.features != window_features::per_window ? 0
+        : quantized_
+            ? detail::saturating_product(windows, offsets_.size(),
+                                         detail::quantized_tiles::bytes_per_position(dim))
+            : detail::saturating_product(windows, offsets_.size(), dim, sizeof(scalar_type));
     const std::uint64_t total = window_bytes > ~std::uint64_t{0} - field_bytes
                                     ? ~std::uint64_t{0}
                                     : field_bytes + window_bytes;
@@ -716,7 +848,7 @@ descriptor_likelihood<Descriptor>::descriptor_likelihood(Descriptor descriptor,
     what << "the map's dense descriptors (" << field_count << " x " << dim << " values, twice)";
     if (window_bytes > 0)
       what << " and the per-window descriptors (" << windows << " windows x " << offsets_.size()
-           << " patches x " << dim << " values)";
+           << " patches x " << dim << (quantized_ ? " bytes" : " values") << ")";
     detail::check_memory("descriptor_likelihood", what.str(), total,
                          "use a coarser map (fewer mm per px means more states), "
                          "window_features::shared_dense (no per-window copies), or a machine "
@@ -734,6 +866,7 @@ descriptor_likelihood<Descriptor>::descriptor_likelihood(Descriptor descriptor,
   if (params.both_signs) {
     if constexpr (contrast_symmetric_descriptor<Descriptor>) {
       basis_ = detail::contrast_basis(descriptor_.contrast_permutation());
+      permutation_ = descriptor_.contrast_permutation();
       if (basis_.dimension() != descriptor_.dimension())
         detail::fail("descriptor_likelihood: the descriptor's contrast_permutation() has ",
                      basis_.dimension(), " elements but its dimension() is ",
@@ -762,10 +895,30 @@ descriptor_likelihood<Descriptor>::descriptor_likelihood(Descriptor descriptor,
     const Eigen::Index dim = field_.values.rows();
     per_window_.clear();  // each built in place: no copies of 4 MB of zeros
     per_window_.reserve(static_cast<std::size_t>(m_count));
-    for (Eigen::Index m = 0; m < m_count; ++m)  // every window is set below
-      per_window_.emplace_back(rows_ * cols_, dim,
-                               detail::descriptor_tiles<scalar_type>::for_overwrite);
+    for (Eigen::Index m = 0; m < m_count; ++m) {  // every window is set below
+      if (quantized_)
+        per_window_.push_back({{}, detail::quantized_tiles(rows_ * cols_, dim)});
+      else
+        per_window_.push_back(
+            {detail::descriptor_tiles<scalar_type>(
+                 rows_ * cols_, dim, detail::descriptor_tiles<scalar_type>::for_overwrite),
+             {}});
+    }
     descriptor_matrix column(dim, 1);  // both_signs: one window patch
+    // Quantised storage: windows q0 .. of patch m from float columns (both_signs or not: the
+    // quantised map stays in the descriptor's own basis, see sign_queries).
+    const auto quantize = [&](Eigen::Index m, Eigen::Index q0, const auto& columns) {
+      auto& tiles = per_window_[static_cast<std::size_t>(m)].quantized;
+      const std::uint64_t before = tiles.clamped();
+      if (!tiles.set_columns(q0, columns))
+        detail::fail(
+            "descriptor_likelihood: descriptor_storage::int8 stores non-negative "
+            "descriptor elements (SIFT histograms), but a window's patch ",
+            m,
+            " has a negative element; use descriptor_storage::float32 for this "
+            "descriptor");
+      clamped_ += tiles.clamped() - before;
+    };
     if constexpr (describes_windows<Descriptor>) {
       // The same descriptors from work the windows share (dense_sift: 178 -> 8.2 ms for
       // classic_sift on 120 px, issue 14), a row of windows at a time; patch m of the row's
@@ -777,8 +930,10 @@ descriptor_likelihood<Descriptor>::descriptor_likelihood(Descriptor descriptor,
             for (Eigen::Index m = 0; m < m_count; ++m) {
               const Eigen::Map<const descriptor_matrix, 0, Eigen::OuterStride<>> patch(
                   block.data() + m * dim, dim, cols_, Eigen::OuterStride<>(m_count * dim));
-              auto& tiles = per_window_[static_cast<std::size_t>(m)];
-              if (params.both_signs) {
+              auto& tiles = per_window_[static_cast<std::size_t>(m)].values;
+              if (quantized_) {
+                quantize(m, r * cols_, patch);
+              } else if (params.both_signs) {
                 basis_row.resize(dim, cols_);
                 for (Eigen::Index c = 0; c < cols_; ++c)
                   basis_.apply(patch.col(c), basis_row.col(c));
@@ -797,11 +952,14 @@ descriptor_likelihood<Descriptor>::descriptor_likelihood(Descriptor descriptor,
         const auto wf = descriptor_.compute(cut);
         for (Eigen::Index m = 0; m < m_count; ++m) {
           const grid_cell o = offsets_[static_cast<std::size_t>(m)];
-          if (params.both_signs) {
+          if (quantized_) {
+            column.col(0) = wf.at(o.row, o.col);
+            quantize(m, r * cols_ + c, column);
+          } else if (params.both_signs) {
             basis_.apply(wf.at(o.row, o.col), column.col(0));
-            per_window_[static_cast<std::size_t>(m)].set(r * cols_ + c, column.col(0));
+            per_window_[static_cast<std::size_t>(m)].values.set(r * cols_ + c, column.col(0));
           } else {
-            per_window_[static_cast<std::size_t>(m)].set(r * cols_ + c, wf.at(o.row, o.col));
+            per_window_[static_cast<std::size_t>(m)].values.set(r * cols_ + c, wf.at(o.row, o.col));
           }
         }
       }

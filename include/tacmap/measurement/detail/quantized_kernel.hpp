@@ -1,0 +1,379 @@
+// tacmap: descriptors stored as 7-bit integers, and their distance kernel (issue 14).
+//
+// The per-window features of the default model (classic_sift, 120 px map) are 8,137 windows x
+// 3 patches x 128 floats = 12.5 MB, streamed once per touch: the update was bound by that
+// stream. Stored as bytes they are 3.1 MB, as VLFeat and OpenCV store SIFT: an element v
+// becomes round(v * quantization_scale) in [0, 127] (see `quantize` for the clamps), and a
+// tactile descriptor is quantised the same way per touch.
+//
+// Why 7 bits and not 8: the AVX2 kernel multiplies with `vpmaddubsw` (unsigned byte x signed
+// byte, adjacent pairs summed in int16 with saturation). With both operands in [0, 127] (the
+// map) and [-127, 127] (the touch) a pair sums to at most 2 x 127 x 127 = 32,258 < 32,767: it
+// can never saturate, so the integer dot product is exact. 8-bit map values (255) could.
+//
+// Why the result is exact: ||F||^2 + ||g||^2 - 2 F.g is evaluated in int32 (at most
+// 128 x 127^2 x 4 < 2^24 for 128 elements), so the expansion has no cancellation error (the
+// float kernel recomputes near-matches from differences; this one never needs to) and an exact
+// match gives exactly 0. The int32 value converts to float exactly (< 2^24); the distance is
+// sqrt(d2 * scale^-2), one rounding each, in the same order in every kernel: the AVX2 kernel,
+// the portable one and the scalar reference give the same bits.
+//
+// Layout: a tile holds 8 positions; its row r (32 bytes) holds elements 4r .. 4r + 3 of each of
+// the 8 positions (position p at bytes 4p .. 4p + 3), so one `vpmaddubsw` + `vpmaddwd` gives 8
+// partial dot products of 4 elements, one per position, with no horizontal sums. The dimension
+// is padded with zeros to a multiple of 4 (zeros change no dot product or norm).
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <type_traits>
+#include <vector>
+#include <xsimd/xsimd.hpp>
+
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
+
+#include "tacmap/config.hpp"
+#include "tacmap/measurement/detail/distance_kernel.hpp"
+
+namespace tacmap::detail {
+
+/// Integer steps per unit of a descriptor element. 254: [0, 0.5] is covered by the 7 bits, as
+/// VLFeat's and OpenCV's 512 x v saturated at 255 covers [0, 0.498] with 8. SIFT elements are
+/// <= 1 but above 0.5 only in descriptors with at most 3 strong bins (the 0.2 clamp and the
+/// renormalisation); those are clamped at 127 and counted (`quantized_tiles::clamped`).
+inline constexpr float quantization_scale = 254.0F;
+
+/// Result of quantising one value: the integer and whether it was clamped.
+struct quantized_value {
+  std::int32_t value = 0;
+  bool clamped = false;
+};
+
+/// round(v * quantization_scale) clamped to [lowest, 127]. Clamped (reported): values beyond
+/// the range, and a NaN (to 0) — never a NaN or an out-of-range byte downstream.
+[[nodiscard]] inline quantized_value quantize(float v, std::int32_t lowest) {
+  const float x = v * quantization_scale;
+  if (!(x >= static_cast<float>(lowest))) return {lowest == 0 || std::isnan(x) ? 0 : lowest, true};
+  if (x > 127.0F) return {127, x >= 127.5F};  // rounds to 127 unless it exceeds it
+  return {static_cast<std::int32_t>(std::lround(x)), false};
+}
+
+/// Descriptors of `positions` positions as 7-bit integers, tiled for `quantized_distances`.
+class quantized_tiles {
+ public:
+  static constexpr Eigen::Index width = 8;       ///< positions per tile
+  static constexpr Eigen::Index group = 4;       ///< elements per position in a 32-byte row
+  static constexpr Eigen::Index row_bytes = 32;  ///< width * group
+
+  quantized_tiles() = default;
+  /// Room for `positions` descriptors of `dimension` elements, every one to be set.
+  quantized_tiles(Eigen::Index positions, Eigen::Index dimension)
+      : positions_(positions), dim_(dimension), rows_((dimension + group - 1) / group) {
+    const Eigen::Index tiles = (positions + width - 1) / width;
+    data_.assign(static_cast<std::size_t>(tiles * rows_ * row_bytes), 0);
+    norms_.assign(static_cast<std::size_t>(tiles * width), 0);
+  }
+  /// Quantises and stores descriptors `columns` (dimension x n) at positions q0 .. q0 + n - 1.
+  /// Elements above the range are clamped at 127 and counted (`clamped`); a negative element
+  /// is refused (returns false and stores nothing more): the map side is unsigned.
+  template <class Derived>
+  [[nodiscard]] bool set_columns(Eigen::Index q0, const Eigen::DenseBase<Derived>& columns) {
+    for (Eigen::Index j = 0; j < columns.cols(); ++j) {
+      const Eigen::Index q = q0 + j;
+      std::uint8_t* lane = data_.data() + (q / width) * rows_ * row_bytes + (q % width) * group;
+      std::int32_t norm = 0;
+      for (Eigen::Index k = 0; k < dim_; ++k) {
+        const float v = static_cast<float>(columns(k, j));
+        if (v < 0.0F) return false;
+        const quantized_value c = quantize(v, 0);
+        clamped_ += c.clamped ? 1U : 0U;
+        lane[(k / group) * row_bytes + k % group] = static_cast<std::uint8_t>(c.value);
+        norm += c.value * c.value;
+      }
+      norms_[static_cast<std::size_t>(q)] = norm;
+    }
+    return true;
+  }
+  /// Element k of position q (an integer in [0, 127]).
+  [[nodiscard]] std::int32_t at(Eigen::Index q, Eigen::Index k) const {
+    return data_[static_cast<std::size_t>((q / width) * rows_ * row_bytes +
+                                          (k / group) * row_bytes + (q % width) * group +
+                                          k % group)];
+  }
+  [[nodiscard]] Eigen::Index positions() const { return positions_; }
+  [[nodiscard]] Eigen::Index dimension() const { return dim_; }
+  /// 32-byte rows per tile: the dimension / 4, rounded up.
+  [[nodiscard]] Eigen::Index rows() const { return rows_; }
+  [[nodiscard]] Eigen::Index tiles() const { return (positions_ + width - 1) / width; }
+  [[nodiscard]] const std::uint8_t* tile(Eigen::Index t) const {
+    return data_.data() + t * rows_ * row_bytes;
+  }
+  /// ||F(q)||^2 in integer units from position q on (0 past the last position).
+  [[nodiscard]] const std::int32_t* squared_norms_from(Eigen::Index q) const {
+    return norms_.data() + q;
+  }
+  /// Elements clamped at 127 so far (values above 127.5 / quantization_scale).
+  [[nodiscard]] std::uint64_t clamped() const { return clamped_; }
+  /// Bytes held per position for descriptors of `dimension` elements (the memory check; the
+  /// last tile's padding, under 8 positions, aside): the elements rounded up to a multiple of
+  /// 4, and the norm.
+  [[nodiscard]] static constexpr std::uint64_t bytes_per_position(std::uint64_t dimension) {
+    return (dimension + group - 1) / group * group + sizeof(std::int32_t);
+  }
+
+ private:
+  Eigen::Index positions_ = 0;
+  Eigen::Index dim_ = 0;
+  Eigen::Index rows_ = 0;
+  std::uint64_t clamped_ = 0;
+  // 64-byte aligned: the AVX2 kernel loads whole rows aligned.
+  std::vector<std::uint8_t, xsimd::aligned_allocator<std::uint8_t, 64>> data_;
+  std::vector<std::int32_t, xsimd::aligned_allocator<std::int32_t, 64>> norms_;
+};
+
+/// Tactile descriptors quantised for `quantized_distances`: column j's elements as signed bytes
+/// in [-127, 127] (padded with zeros to whole 4-element groups), and its squared norm.
+struct quantized_query {
+  Eigen::Index dimension = 0;
+  Eigen::Index rows = 0;            // 4-element groups
+  std::vector<std::int8_t> values;  // column j at j * rows * 4
+  std::vector<std::int32_t> norms;  // one per column
+  std::uint64_t clamped = 0;        // elements clamped into [-127, 127]
+
+  [[nodiscard]] Eigen::Index count() const { return static_cast<Eigen::Index>(norms.size()); }
+  [[nodiscard]] const std::int8_t* column(Eigen::Index j) const {
+    return values.data() + j * rows * quantized_tiles::group;
+  }
+  /// Quantises `g`'s columns (reusing this object's storage between touches).
+  template <class Derived>
+  void assign(const Eigen::DenseBase<Derived>& g) {
+    dimension = g.rows();
+    rows = (dimension + quantized_tiles::group - 1) / quantized_tiles::group;
+    values.assign(static_cast<std::size_t>(g.cols() * rows * quantized_tiles::group), 0);
+    norms.assign(static_cast<std::size_t>(g.cols()), 0);
+    clamped = 0;
+    for (Eigen::Index j = 0; j < g.cols(); ++j)
+      for (Eigen::Index k = 0; k < dimension; ++k) {
+        const quantized_value c = quantize(static_cast<float>(g(k, j)), -127);
+        clamped += c.clamped ? 1U : 0U;
+        values[static_cast<std::size_t>(j * rows * quantized_tiles::group + k)] =
+            static_cast<std::int8_t>(c.value);
+        norms[static_cast<std::size_t>(j)] += c.value * c.value;
+      }
+  }
+};
+
+/// The distance of one integer squared distance, in descriptor units: sqrt(d2 / scale^2).
+/// Every kernel ends with this expression, so they agree bit for bit.
+[[nodiscard]] inline float quantized_distance(std::int32_t d2) {
+  constexpr float inverse_square = 1.0F / (quantization_scale * quantization_scale);
+  return std::sqrt(static_cast<float>(d2) * inverse_square);
+}
+
+/// Plain reference: with `sum`, out[0][q] (+)= sum_j || F(q) - g_j ||; otherwise
+/// out[j][q] (+)= || F(q) - g_j ||, for every position q (added when `add`, else stored). The
+/// sum is taken in groups of three descriptors, each group added to the output, as the
+/// kernels do.
+inline void quantized_distances_scalar(const quantized_tiles& f, const quantized_query& g,
+                                       float* const* out, bool sum, bool add) {
+  for (Eigen::Index q = 0; q < f.positions(); ++q) {
+    float total = 0.0F;
+    bool added = add;
+    for (Eigen::Index j = 0; j < g.count(); ++j) {
+      std::int32_t d2 = 0;
+      for (Eigen::Index k = 0; k < f.dimension(); ++k) {
+        const std::int32_t d = f.at(q, k) - g.column(j)[k];
+        d2 += d * d;
+      }
+      const float d = quantized_distance(d2);
+      if (sum) {
+        total = j % 3 == 0 ? d : total + d;
+        if (j % 3 == 2 || j + 1 == g.count()) {
+          out[0][q] = added ? out[0][q] + total : total;
+          added = true;
+        }
+      } else {
+        float& o = out[j][q];
+        o = add ? o + d : d;
+      }
+    }
+  }
+}
+
+namespace quantized_kernel {
+
+// Finishes one tile: the integer dot products `dot[j][p]` of its (up to) 8 positions become
+// distances, summed or stored per descriptor, written from position `first` (relative to
+// `origin`). Shared by both kernels, so that every one rounds alike.
+template <std::size_t Count, class A>
+void finish_tile(const quantized_tiles& f, const quantized_query& g, Eigen::Index j0,
+                 const std::int32_t (&dot)[Count][quantized_tiles::width], Eigen::Index first,
+                 float* const* out, bool sum, bool add, Eigen::Index origin) {
+  const std::int32_t* nf = f.squared_norms_from(first);
+  const Eigen::Index real = std::min(quantized_tiles::width, f.positions() - first);
+  for (Eigen::Index p = 0; p < real; ++p) {
+    float total = 0.0F;
+    for (std::size_t j = 0; j < Count; ++j) {
+      const auto jj = j0 + static_cast<Eigen::Index>(j);
+      const float d = quantized_distance(nf[p] + g.norms[static_cast<std::size_t>(jj)] -
+                                         2 * dot[j][static_cast<std::size_t>(p)]);
+      if (sum) {
+        total = j == 0 ? d : total + d;
+      } else {
+        float& o = out[jj][first + p - origin];
+        o = add ? o + d : d;
+      }
+    }
+    if (sum) {
+      float& o = out[0][first + p - origin];
+      o = add ? o + total : total;
+    }
+  }
+}
+
+// Portable: integer multiply-adds on whatever the compiler vectorises them to. (Templates on A
+// like every kernel here: each translation unit's copy is a different function, so the linker
+// never picks an AVX2-compiled copy for the baseline.)
+template <std::size_t Count, class A>
+void tile_dots_portable(const quantized_tiles& f, Eigen::Index t, const quantized_query& g,
+                        Eigen::Index j0, std::int32_t (&dot)[Count][quantized_tiles::width]) {
+  const std::uint8_t* tile = f.tile(t);
+  for (std::size_t j = 0; j < Count; ++j) {
+    const std::int8_t* gj = g.column(j0 + static_cast<Eigen::Index>(j));
+    std::int32_t acc[quantized_tiles::width] = {};
+    for (Eigen::Index r = 0; r < f.rows(); ++r) {
+      const std::uint8_t* row = tile + r * quantized_tiles::row_bytes;
+      const std::int8_t* gr = gj + r * quantized_tiles::group;
+      for (std::size_t p = 0; p < quantized_tiles::width; ++p)
+        for (std::size_t e = 0; e < quantized_tiles::group; ++e)
+          acc[p] += static_cast<std::int32_t>(row[p * quantized_tiles::group + e]) * gr[e];
+    }
+    for (std::size_t p = 0; p < quantized_tiles::width; ++p) dot[j][p] = acc[p];
+  }
+}
+
+#if defined(__AVX2__)
+// AVX2: xsimd 8.1 has no byte multiply-add, so this one kernel uses the intrinsics directly.
+// Per 32-byte row and descriptor: vpmaddubsw (u8 map x s8 touch -> 16 int16 pair sums, exact:
+// see the top of this file) and vpmaddwd with ones (-> 8 int32 sums of 4 products, one per
+// position). `gb`: each descriptor's 4-element groups broadcast to 8 int32 lanes.
+template <std::size_t Count, class A>
+void tile_dots_avx2(const quantized_tiles& f, Eigen::Index t, const std::int32_t* gb,
+                    std::int32_t (&dot)[Count][quantized_tiles::width]) {
+  const Eigen::Index rows = f.rows();
+  const std::uint8_t* tile = f.tile(t);
+  const __m256i ones = _mm256_set1_epi16(1);
+  __m256i acc[Count];
+  for (std::size_t j = 0; j < Count; ++j) acc[j] = _mm256_setzero_si256();
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    const __m256i v =
+        _mm256_load_si256(reinterpret_cast<const __m256i*>(tile + r * quantized_tiles::row_bytes));
+    for (std::size_t j = 0; j < Count; ++j) {
+      const __m256i gj = _mm256_load_si256(reinterpret_cast<const __m256i*>(
+          gb + (static_cast<Eigen::Index>(j) * rows + r) * quantized_tiles::width));
+      acc[j] = _mm256_add_epi32(acc[j], _mm256_madd_epi16(_mm256_maddubs_epi16(v, gj), ones));
+    }
+  }
+  for (std::size_t j = 0; j < Count; ++j)
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dot[j]), acc[j]);
+}
+#endif
+
+// True when architecture A's kernel is the AVX2 one (compiled with AVX2 and A at least AVX2).
+template <class A>
+constexpr bool uses_avx2() {
+#if defined(__AVX2__)
+  return std::is_base_of_v<xsimd::avx2, A>;
+#else
+  return false;
+#endif
+}
+
+// Tiles of `range` against descriptors [j0, j0 + Count).
+template <std::size_t Count, class A>
+void tiles(const quantized_tiles& f, const quantized_query& g, Eigen::Index j0, float* const* out,
+           bool sum, bool add, tile_range range) {
+  const Eigen::Index end = range.end < 0 ? f.tiles() : std::min(range.end, f.tiles());
+  const Eigen::Index origin = range.begin * quantized_tiles::width;
+  std::int32_t dot[Count][quantized_tiles::width];
+  if constexpr (uses_avx2<A>()) {
+#if defined(__AVX2__)
+    const Eigen::Index rows = f.rows();
+    // (int32 lanes rather than a vector of __m256i: GCC drops the type's alignment attribute
+    // in a template argument.)
+    constexpr auto count = static_cast<Eigen::Index>(Count);
+    std::vector<std::int32_t, xsimd::aligned_allocator<std::int32_t, 64>> gb(
+        static_cast<std::size_t>(count * rows * quantized_tiles::width));
+    for (Eigen::Index j = 0; j < count; ++j) {
+      const std::int8_t* gj = g.column(j0 + j);
+      for (Eigen::Index r = 0; r < rows; ++r) {
+        std::int32_t four = 0;
+        std::memcpy(&four, gj + r * quantized_tiles::group, sizeof four);
+        std::fill_n(gb.begin() + (j * rows + r) * quantized_tiles::width, quantized_tiles::width,
+                    four);
+      }
+    }
+    for (Eigen::Index t = range.begin; t < end; ++t) {
+      tile_dots_avx2<Count, A>(f, t, gb.data(), dot);
+      finish_tile<Count, A>(f, g, j0, dot, t * quantized_tiles::width, out, sum, add, origin);
+    }
+#endif
+  } else {
+    for (Eigen::Index t = range.begin; t < end; ++t) {
+      tile_dots_portable<Count, A>(f, t, g, j0, dot);
+      finish_tile<Count, A>(f, g, j0, dot, t * quantized_tiles::width, out, sum, add, origin);
+    }
+  }
+}
+
+}  // namespace quantized_kernel
+
+/// With `sum`: out[0][q] (+)= sum_j || F(q) - g_j || over g's descriptors; otherwise
+/// out[j][q] (+)= || F(q) - g_j ||; added when `add`, else stored. Only the positions of the
+/// tiles `range` (8 positions each), written relative to its first position
+/// (out[j][q - range.begin * 8]); every tile is computed alike wherever a range starts, so a
+/// range's values are the whole pass's bit for bit (the filter's tracking mode).
+/// Architecture A's kernel (the AVX2 one where A and the compiler flags have AVX2, else
+/// portable integer code); `quantized_distances` chooses A.
+template <class A>
+void quantized_distances_simd(const quantized_tiles& f, const quantized_query& g, float* const* out,
+                              bool sum, bool add, tile_range range) {
+  TACMAP_ASSERT(g.dimension == f.dimension(), "quantized_distances: dimensions differ");
+  // Three descriptors per pass over the tiles (the default's all-pairs M = 3; a touch and its
+  // inversion are 2): each row loaded once serves all of them.
+  for (Eigen::Index j = 0; j < g.count();) {
+    const bool a = add || (sum && j > 0);  // later descriptors add to the first ones' sums
+    switch (std::min<Eigen::Index>(g.count() - j, 3)) {
+      case 3:
+        quantized_kernel::tiles<3, A>(f, g, j, out, sum, a, range);
+        j += 3;
+        break;
+      case 2:
+        quantized_kernel::tiles<2, A>(f, g, j, out, sum, a, range);
+        j += 2;
+        break;
+      default:
+        quantized_kernel::tiles<1, A>(f, g, j, out, sum, a, range);
+        j += 1;
+        break;
+    }
+  }
+}
+
+/// `quantized_distances_simd` on the compile-time architecture, or (with tacmap::precompiled)
+/// on the CPU's best level.
+inline void quantized_distances(const quantized_tiles& f, const quantized_query& g,
+                                float* const* out, bool sum, bool add, tile_range range = {}) {
+#if defined(TACMAP_PRECOMPILED) && TACMAP_PRECOMPILED
+  active_kernels().quantized_distances(f, g, out, sum, add, range);
+#else
+  quantized_distances_simd<kernel_arch<float>>(f, g, out, sum, add, range);
+#endif
+}
+
+}  // namespace tacmap::detail

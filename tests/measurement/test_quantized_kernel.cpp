@@ -1,0 +1,192 @@
+// The 7-bit descriptor storage and its distance kernel (issue 14) against the scalar reference,
+// at the extremes of the integer range, and the quantisation's clamps.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "tacmap/measurement/detail/quantized_kernel.hpp"
+#include "tacmap/simd.hpp"
+
+namespace {
+
+using tacmap::detail::quantized_query;
+using tacmap::detail::quantized_tiles;
+
+// Every kernel the build has, against the reference, summed and each, added and stored, on the
+// whole map and on a range of tiles: the same bits (see quantized_kernel.hpp).
+void check_against_reference(const quantized_tiles& f, const quantized_query& g) {
+  const Eigen::Index n = f.positions();
+  const Eigen::Index count = g.count();
+  for (const bool sum : {true, false}) {
+    for (const bool add : {true, false}) {
+      CAPTURE(sum);
+      CAPTURE(add);
+      const Eigen::Index columns = sum ? 1 : count;
+      Eigen::ArrayXXf ref = Eigen::ArrayXXf::Constant(n, columns, 0.25F);
+      std::vector<float*> ref_out;
+      for (Eigen::Index j = 0; j < columns; ++j) ref_out.push_back(&ref(0, j));
+      tacmap::detail::quantized_distances_scalar(f, g, ref_out.data(), sum, add);
+
+      const auto run = [&](auto&& kernel) {
+        Eigen::ArrayXXf out = Eigen::ArrayXXf::Constant(n, columns, 0.25F);
+        std::vector<float*> o;
+        for (Eigen::Index j = 0; j < columns; ++j) o.push_back(&out(0, j));
+        kernel(o.data(), tacmap::detail::tile_range{});
+        for (Eigen::Index j = 0; j < columns; ++j)
+          for (Eigen::Index q = 0; q < n; ++q) REQUIRE(out(q, j) == ref(q, j));
+        // A range of tiles: the whole pass's values, relative to its first position.
+        const Eigen::Index tiles = f.tiles();
+        if (tiles >= 3) {
+          const tacmap::detail::tile_range range{1, tiles - 1};
+          Eigen::ArrayXXf part = Eigen::ArrayXXf::Constant(n, columns, 0.25F);
+          std::vector<float*> p;
+          for (Eigen::Index j = 0; j < columns; ++j) p.push_back(&part(0, j));
+          kernel(p.data(), range);
+          const Eigen::Index first = range.begin * quantized_tiles::width;
+          const Eigen::Index last = std::min(n, range.end * quantized_tiles::width);
+          for (Eigen::Index j = 0; j < columns; ++j)
+            for (Eigen::Index q = first; q < last; ++q) REQUIRE(part(q - first, j) == ref(q, j));
+        }
+      };
+      run([&](float* const* o, tacmap::detail::tile_range r) {
+        tacmap::detail::quantized_distances(f, g, o, sum, add, r);
+      });
+      run([&](float* const* o, tacmap::detail::tile_range r) {
+        tacmap::detail::quantized_distances_simd<xsimd::generic>(f, g, o, sum, add, r);
+      });
+      run([&](float* const* o, tacmap::detail::tile_range r) {
+        tacmap::detail::quantized_distances_simd<tacmap::detail::kernel_arch<float>>(f, g, o, sum,
+                                                                                     add, r);
+      });
+#if defined(TACMAP_PRECOMPILED) && TACMAP_PRECOMPILED
+      for (const auto level : {tacmap::simd_level::sse2, tacmap::simd_level::avx2_fma})
+        if (const auto* k = tacmap::detail::kernels_for(level))
+          run([&](float* const* o, tacmap::detail::tile_range r) {
+            k->quantized_distances(f, g, o, sum, add, r);
+          });
+#endif
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("quantized_distances matches its scalar reference bit for bit") {
+  std::mt19937 rng(14);
+  std::uniform_real_distribution<float> value(0.0F, 0.5F);
+  for (const Eigen::Index positions : {1, 7, 8, 9, 31, 1000}) {
+    for (const Eigen::Index dim : {1, 5, 32, 128}) {
+      CAPTURE(positions);
+      CAPTURE(dim);
+      Eigen::ArrayXXf f(dim, positions);
+      for (float& v : f.reshaped()) v = value(rng);
+      quantized_tiles tiles(positions, dim);
+      REQUIRE(tiles.set_columns(0, f));
+      CHECK(tiles.clamped() == 0);
+      for (Eigen::Index q = 0; q < positions; q += 3)
+        for (Eigen::Index k = 0; k < dim; ++k)
+          REQUIRE(tiles.at(q, k) == static_cast<std::int32_t>(std::lround(f(k, q) * 254.0F)));
+      for (const Eigen::Index count : {1, 2, 3, 5}) {
+        CAPTURE(count);
+        Eigen::ArrayXXf g(dim, count);
+        for (float& v : g.reshaped()) v = value(rng);
+        g.col(0) = f.col(positions / 2);  // an exact match
+        quantized_query q;
+        q.assign(g);
+        check_against_reference(tiles, q);
+        // The exact match is exactly 0: integer arithmetic has no cancellation.
+        Eigen::ArrayXf d(positions);
+        float* o = d.data();
+        quantized_query one;
+        one.assign(g.leftCols(1));
+        tacmap::detail::quantized_distances(tiles, one, &o, true, false);
+        CHECK(d(positions / 2) == 0.0F);
+      }
+    }
+  }
+}
+
+TEST_CASE("quantized_distances: the extremes of the 7-bit range do not saturate") {
+  // vpmaddubsw sums two u8 x s8 products in int16 with saturation: 127 x 127 + 127 x 127 =
+  // 32,258 and 127 x (-127) twice = -32,258 must both come out exact. Every map element 127
+  // against every touch element 127 (distance 0), -127 (the farthest) and 0.
+  for (const Eigen::Index dim : {4, 128}) {
+    CAPTURE(dim);
+    const Eigen::Index positions = 17;
+    const Eigen::ArrayXXf f = Eigen::ArrayXXf::Constant(dim, positions, 0.5F);
+    quantized_tiles tiles(positions, dim);
+    REQUIRE(tiles.set_columns(0, f));
+    CHECK(tiles.at(3, dim - 1) == 127);
+    Eigen::ArrayXXf g(dim, 3);
+    g.col(0).setConstant(0.5F);
+    g.col(1).setConstant(-0.5F);
+    g.col(2).setZero();
+    quantized_query q;
+    q.assign(g);
+    CHECK(q.clamped == 0);
+    check_against_reference(tiles, q);
+    Eigen::ArrayXXf d(positions, 3);
+    float* o[3] = {&d(0, 0), &d(0, 1), &d(0, 2)};
+    tacmap::detail::quantized_distances(tiles, q, o, false, false);
+    const auto expect = [&](double per_element) {
+      return doctest::Approx(std::sqrt(static_cast<double>(dim)) * per_element / 254.0)
+          .epsilon(1e-6);
+    };
+    for (Eigen::Index p = 0; p < positions; ++p) {
+      CHECK(d(p, 0) == 0.0F);
+      CHECK(d(p, 1) == expect(254.0));
+      CHECK(d(p, 2) == expect(127.0));
+    }
+  }
+}
+
+TEST_CASE("quantize: clamps are counted, never NaN or an out-of-range byte") {
+  using tacmap::detail::quantize;
+  CHECK(quantize(0.25F, 0).value == 64);  // 63.5 rounds away from zero
+  CHECK_FALSE(quantize(0.25F, 0).clamped);
+  CHECK(quantize(0.5F, 0).value == 127);
+  CHECK_FALSE(quantize(0.5F, 0).clamped);
+  CHECK(quantize(0.501F, 0).value == 127);  // 127.25 rounds to 127: not a clamp
+  CHECK_FALSE(quantize(0.501F, 0).clamped);
+  CHECK(quantize(0.51F, 0).value == 127);  // 129.5: clamped
+  CHECK(quantize(0.51F, 0).clamped);
+  CHECK(quantize(1.0F, 0).value == 127);
+  CHECK(quantize(std::numeric_limits<float>::max(), 0).value == 127);
+  CHECK(quantize(std::numeric_limits<float>::infinity(), 0).clamped);
+  CHECK(quantize(std::numeric_limits<float>::infinity(), -127).value == 127);
+  CHECK(quantize(-std::numeric_limits<float>::infinity(), -127).value == -127);
+  CHECK(quantize(-1.0F, -127).value == -127);
+  CHECK(quantize(-1.0F, -127).clamped);
+  CHECK(quantize(-1.0F, 0).value == 0);
+  CHECK(quantize(std::numeric_limits<float>::quiet_NaN(), -127).value == 0);
+  CHECK(quantize(std::numeric_limits<float>::quiet_NaN(), -127).clamped);
+  CHECK(quantize(std::numeric_limits<float>::denorm_min(), 0).value == 0);
+
+  // The map side: elements above the range clamped and counted; a negative one refused.
+  Eigen::ArrayXXf f = Eigen::ArrayXXf::Constant(8, 3, 0.1F);
+  f(2, 1) = 1.0F;
+  f(5, 2) = std::numeric_limits<float>::max();
+  quantized_tiles tiles(3, 8);
+  REQUIRE(tiles.set_columns(0, f));
+  CHECK(tiles.clamped() == 2);
+  CHECK(tiles.at(1, 2) == 127);
+  CHECK(tiles.at(2, 5) == 127);
+  f(0, 0) = -1e-3F;
+  quantized_tiles refused(3, 8);
+  CHECK_FALSE(refused.set_columns(0, f));
+
+  // The touch side: a finite descriptor always gives finite distances.
+  Eigen::ArrayXXf g(8, 1);
+  g << 1e30F, -1e30F, 0.0F, 0.5F, 0.2F, 0.7F, 0.0F, 0.1F;
+  quantized_query q;
+  q.assign(g);
+  CHECK(q.clamped == 3);
+  Eigen::ArrayXf d(3);
+  float* o = d.data();
+  tacmap::detail::quantized_distances(tiles, q, &o, true, false);
+  for (Eigen::Index p = 0; p < 3; ++p) CHECK(std::isfinite(d(p)));
+}
