@@ -40,8 +40,9 @@ class tbb_executor {
 
   void parallel_for(std::size_t count, chunk_function f) {
     if (count == 0) return;
-    // A few ranges per thread (as thread_pool_executor): long ranges, and room to balance.
-    const std::size_t grain = std::max<std::size_t>(1, count / (4 * concurrency()));
+    // About 16 ranges per thread, as thread_pool_executor: long ranges, and little left for
+    // one thread at the end.
+    const std::size_t grain = std::max<std::size_t>(1, count / (16 * concurrency()));
     arena_.execute([&] {
       oneapi::tbb::parallel_for(
           oneapi::tbb::blocked_range<std::size_t>(0, count, grain),

@@ -66,9 +66,13 @@ class thread_pool_executor {
       const std::lock_guard<std::mutex> lock(mutex_);
       job_ = &f;
       count_ = count;
-      // A few ranges per thread: a thread slowed down by other work hands its share to the
-      // others, while each range stays long (a loop over a grid's tiles has thousands).
-      ranges_ = std::min(count, 4 * concurrency());
+      // 16 ranges per thread: the last range taken is what the other threads may wait for at
+      // the end (a sixteenth of a thread's share), and a thread slowed down by other work on
+      // the machine hands its share to the others; a range still holds many chunks (a grid's
+      // loop has thousands), so taking one (an atomic increment) costs nothing measurable.
+      // (At 640 x 480 on 2 threads a range is then about 0.8 ms of a 15 ms loop; with 4 per
+      // thread it was 3 ms.)
+      ranges_ = std::min(count, 16 * concurrency());
       next_.store(0, std::memory_order_relaxed);
       failed_.store(false, std::memory_order_relaxed);
       error_ = nullptr;
