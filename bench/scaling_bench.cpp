@@ -10,8 +10,9 @@
 //    window (per-window descriptors for every heading would need 36 x 3 x 128 floats per
 //    position, 15 GB at 640 x 480). It has no tracking hook: every touch is a full update.
 //
-// Only the 120 x 120 rows run by default (the CTest smoke run stays cheap); the others need
-// about 1 GB and seconds each:
+// Wall-clock times, with the whole process's CPU time beside them (CPU / wall: the cores a run
+// actually had on a shared machine). Only the 120 x 120 rows run by default (the CTest smoke run
+// stays cheap); the others need about 1 GB and seconds each:
 //   TACMAP_BENCH_SCALING=1 build/release/bench/tacmap_scaling_bench --benchmark_repetitions=3
 #include <benchmark/benchmark.h>
 
@@ -184,10 +185,11 @@ void planar_tracked_touch(benchmark::State& state, Eigen::Index cols, Eigen::Ind
     for (const auto& [name, f, unit] : cases) {
       const std::string label =
           std::string(name) + "/" + std::to_string(cols) + "x" + std::to_string(rows);
-      benchmark::RegisterBenchmark(label.c_str(), [f = f, cols = cols,
-                                                   rows = rows](benchmark::State& s) {
-        f(s, cols, rows);
-      })->Unit(unit);
+      benchmark::RegisterBenchmark(label.c_str(), [f = f, cols = cols, rows = rows](
+                                                      benchmark::State& s) { f(s, cols, rows); })
+          ->Unit(unit)
+          ->UseRealTime()
+          ->MeasureProcessCPUTime();
     }
   return 0;
 }();
