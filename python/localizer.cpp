@@ -203,7 +203,13 @@ void bind_config(py::module_& m) {
                 "windows: far cheaper, slightly different borders).");
   cfg.def_readwrite("tau", &localizer_config::tau,
                     "Temperature: exponential shape (descriptor distance units) or NCC (log p "
-                    "= ncc / tau). None: the model's own default (descriptor 0.15, NCC 0.1).")
+                    "= ncc / tau). None: 0.12 for the planar classic_sift model with the "
+                    "exponential shape (the default, fitted with patch_spacing 13), else the "
+                    "model's own default (descriptor 0.15, NCC 0.1).")
+      .def_readwrite("patch_spacing", &localizer_config::patch_spacing,
+                     "Pixels between the tactile image's descriptor patches. None: 13 for the "
+                     "planar classic_sift model (its patches cover the whole touch), else the "
+                     "paper's 9.")
       .def_readwrite("tempering", &localizer_config::tempering, "Exponent on the likelihood.")
       .def_readwrite("motion_sigma_mm", &localizer_config::motion_sigma_mm,
                      "Odometry noise per axis (odometry_gaussian sigma, Sec. III-B), mm.")

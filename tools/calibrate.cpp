@@ -48,6 +48,7 @@ int main(int argc, char** argv) try {
   std::uint64_t seed = 101;
   long long sequences = 0;
   long long map_px = tacmap_tools::default_map_px;  // signed: a negative size is refused
+  long long patch_spacing = 0;                      // 0: the model's default
   bool native = false;
   double tau_min = 0.01, tau_max = 10.0;
   double truth_radius = tacmap::tau_fit_params{}.truth_radius_mm;
@@ -65,6 +66,10 @@ int main(int argc, char** argv) try {
       "--map-px", map_px, "side of the photographs' square maps, px (120; resized by area)");
   app.add_flag("--native", native, "keep each photograph's own size as its map")
       ->excludes(map_px_option);
+  app.add_option("--spacing", patch_spacing,
+                 "px between the tactile image's descriptor patches (default: classic_sift 13, "
+                 "sift_lite 9)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--tau-min", tau_min, "lower end of the search range")->check(CLI::PositiveNumber);
   app.add_option("--tau-max", tau_max, "upper end of the search range")->check(CLI::PositiveNumber);
   app.add_option("--truth-radius", truth_radius,
@@ -103,8 +108,11 @@ int main(int argc, char** argv) try {
                                "'" + scenario_name + "' is not one of: ideal, realistic, unknown");
   }
   config.simulator_seed = seed;
-  // The log-likelihoods are recorded at the model's default tau and rescaled.
-  const double reference_tau = tacmap::descriptor_likelihood_params{}.tau;
+  if (patch_spacing > 0) config.patch_spacing = patch_spacing;
+  // The log-likelihoods are recorded at the temperature the configuration runs with by default
+  // ("now" in the report) and rescaled.
+  const double reference_tau =
+      config.planar_tau().value_or(tacmap::descriptor_likelihood_params{}.tau);
   config.tau = reference_tau;
 
   std::vector<named_map> maps;

@@ -361,7 +361,8 @@ int main(int argc, char** argv) try {
   app.add_option("--motion-sigma", motion_sigma, "odometry noise sigma, mm")
       ->check(CLI::PositiveNumber);
   app.add_option("--spacing", patch_spacing,
-                 "px between the tactile image's descriptor patches (default: the paper's 9)")
+                 "px between the tactile image's descriptor patches (default: classic_sift 13, "
+                 "sift_lite and headings > 0 the paper's 9)")
       ->check(CLI::PositiveNumber);
   app.add_option("--motion-k", motion_k, "odometry noise neighbours (4, 8, 12, 20, 24, ...)");
   app.add_option("--headings", headings,
