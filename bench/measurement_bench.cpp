@@ -65,6 +65,48 @@ BENCHMARK(sift_lite_update_shared);
 BENCHMARK(sift_lite_update_shared_aligned);
 BENCHMARK(classic_sift_update);
 
+// Issue 14: the default model (classic_sift, per window, aligned) with its per-window descriptors
+// as floats (12.5 MB streamed per touch) and as 7-bit integers (3.1 MB), side by side; and the
+// same for the localizer's latent appearance (both contrast signs per touch: the float model in
+// its sum/difference basis, the integer one with the permuted touch).
+void classic_sift_storage(benchmark::State& state, tacmap::descriptor_storage storage,
+                          bool both_signs) {
+  const auto map = bench_map();
+  const auto grid = grid_t::paper();
+  tacmap::descriptor_likelihood_params p;
+  p.storage = storage;
+  p.both_signs = both_signs;
+  const tacmap::descriptor_likelihood<tacmap::classic_sift> model(tacmap::classic_sift{}, map,
+                                                                  grid.window_size(), p);
+  if (!both_signs) {
+    time_measurement(state, model, map, grid);
+    return;
+  }
+  const tacmap::image<float> z = map.block(30, 40, 42, 18);
+  Eigen::ArrayXf ll(2 * grid.size());
+  for (auto _ : state) {
+    model.log_likelihood_both_signs(grid, z, ll.data());
+    benchmark::DoNotOptimize(ll.data());
+  }
+  state.SetItemsProcessed(state.iterations() * grid.size());
+}
+void classic_sift_update_aligned_float(benchmark::State& s) {
+  classic_sift_storage(s, tacmap::descriptor_storage::float32, false);
+}
+void classic_sift_update_aligned_int8(benchmark::State& s) {
+  classic_sift_storage(s, tacmap::descriptor_storage::int8, false);
+}
+void classic_sift_both_signs_float(benchmark::State& s) {
+  classic_sift_storage(s, tacmap::descriptor_storage::float32, true);
+}
+void classic_sift_both_signs_int8(benchmark::State& s) {
+  classic_sift_storage(s, tacmap::descriptor_storage::int8, true);
+}
+BENCHMARK(classic_sift_update_aligned_float);
+BENCHMARK(classic_sift_update_aligned_int8);
+BENCHMARK(classic_sift_both_signs_float);
+BENCHMARK(classic_sift_both_signs_int8);
+
 template <tacmap::window_features Features>
 void sift_lite_map_precompute(benchmark::State& state) {
   const auto map = bench_map();

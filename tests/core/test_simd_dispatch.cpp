@@ -232,7 +232,10 @@ TEST_CASE("models through the dispatched kernels equal the same models through d
     for (const pairing pairs : {pairing::aligned, pairing::all_pairs}) {
       CAPTURE(static_cast<int>(features));
       CAPTURE(static_cast<int>(pairs));
-      const tacmap::descriptor_likelihood_params p{.features = features, .pairs = pairs};
+      // The float kernels (7-bit storage, the default for sift_lite per window, has its own
+      // tests against distances from the same integers: test_quantized_kernel.cpp).
+      const tacmap::descriptor_likelihood_params p{
+          .features = features, .pairs = pairs, .storage = tacmap::descriptor_storage::float32};
       const tacmap::descriptor_likelihood fast(tacmap::sift_lite{}, map, grid.window_size(), p);
       const tacmap::descriptor_likelihood slow(sift_lite_through_distance{}, map,
                                                grid.window_size(), p);

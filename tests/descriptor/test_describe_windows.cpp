@@ -158,7 +158,10 @@ static_assert(!tacmap::describes_windows<per_cut<tacmap::classic_sift>>);
 /// Per-window distances of a few touches through the model prepared with describe_windows and
 /// through the old per-window loop; returns the largest difference relative to the distance.
 template <class D>
-double model_difference(const tacmap::descriptor_likelihood_params& params) {
+double model_difference(tacmap::descriptor_likelihood_params params) {
+  // The descriptors compared as floats: 7-bit storage (the default for dense_sift, not for the
+  // per_cut wrapper) would round values 1e-6 apart to different steps now and then.
+  params.storage = tacmap::descriptor_storage::float32;
   const image<float> map = blob_map<float>(48, 31, 11) + 0.2F * noise_map<float>(48, 31, 12);
   const pixel_size window{18, 42};
   const tacmap::planar_grid<float> grid({.width = 31, .height = 48}, 3.4 / 3.0, window);

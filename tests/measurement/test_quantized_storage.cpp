@@ -43,10 +43,13 @@ descriptor_likelihood_params with(descriptor_storage storage, pairing pairs = pa
   return p;
 }
 
-// A descriptor with signed elements: what the 7-bit map storage refuses.
+// A descriptor with signed elements. Declaring them quantisable (H5) is a lie the 7-bit map
+// storage refuses; without the declaration the model keeps floats.
+template <bool Quantizable>
 struct signed_patch {
   using scalar_type = float;
   static constexpr bool euclidean_distance = true;
+  static constexpr bool byte_quantizable = Quantizable;
   [[nodiscard]] Eigen::Index dimension() const { return 4; }
   [[nodiscard]] Eigen::Index patch_size() const { return 2; }
   [[nodiscard]] tacmap::descriptor_field<float> compute(const tacmap::image<float>& img) const {
@@ -172,9 +175,15 @@ TEST_CASE("int8 storage: where it does not apply, and what it refuses or clamps"
 
   // Signed descriptor elements: refused at preparation, naming the remedy.
   const tacmap::pixel_size window{.width = 4, .height = 6};
-  CHECK_THROWS_WITH_AS(descriptor_likelihood(signed_patch{}, map, window,
+  static_assert(tacmap::byte_quantizable_descriptor<tacmap::classic_sift>);
+  static_assert(tacmap::byte_quantizable_descriptor<signed_patch<true>>);
+  static_assert(!tacmap::byte_quantizable_descriptor<signed_patch<false>>);
+  CHECK_THROWS_WITH_AS(descriptor_likelihood(signed_patch<true>{}, map, window,
                                              {.spacing = 2, .storage = descriptor_storage::int8}),
                        doctest::Contains("descriptor_storage::float32"), std::invalid_argument);
-  CHECK_NOTHROW(descriptor_likelihood(signed_patch{}, map, window,
+  CHECK_NOTHROW(descriptor_likelihood(signed_patch<true>{}, map, window,
                                       {.spacing = 2, .storage = descriptor_storage::float32}));
+  CHECK_FALSE(descriptor_likelihood(signed_patch<false>{}, map, window,
+                                    {.spacing = 2, .storage = descriptor_storage::int8})
+                  .stores_quantized());
 }

@@ -88,9 +88,21 @@ concept descriptor = belief_scalar<typename D::scalar_type> &&
 ///      + 1, M = offsets.size()). `descriptor_likelihood` (per_window features) then prepares a
 ///      map from it instead of one `compute` per window; a descriptor can share work between
 ///      overlapping windows there (`dense_sift`: gradients, channels and pooled sums, issue 14).
+///  H5. `static constexpr bool byte_quantizable = true;` (with H1): every element is >= 0 and
+///      all but rare ones are <= 0.5, as in normalised, clamped histograms (`dense_sift`:
+///      normalised to unit length, clamped at 0.2, renormalised). `descriptor_storage::int8`
+///      then stores the per-window descriptors as 7-bit integers (round(254 v); larger
+///      elements clamped at 127 and counted; a negative one refused); without H5 the model
+///      keeps floats.
 template <class D>
 concept euclidean_descriptor = descriptor<D> && requires {
   requires D::euclidean_distance;
+};
+
+/// H5 above.
+template <class D>
+concept byte_quantizable_descriptor = euclidean_descriptor<D> && requires {
+  requires D::byte_quantizable;
 };
 
 /// H2 above.

@@ -140,6 +140,9 @@ class dense_sift {
   /// `distance` is the Euclidean norm of the difference: measurement models may use
   /// ||a||^2 - 2 a.b + ||b||^2 over whole fields instead of calling it pair by pair.
   static constexpr bool euclidean_distance = true;
+  /// Elements >= 0, and <= 0.5 but in descriptors with at most 3 strong bins (normalised,
+  /// clamped, renormalised): descriptor_storage::int8 applies (concept.hpp, H5).
+  static constexpr bool byte_quantizable = true;
 
   /// The default configuration: the paper's patch 18 and spacing 9 when 18 is an even multiple
   /// of NumBins (sift_lite); otherwise the largest such patch <= 18 with spacing 9 (16 for

@@ -85,6 +85,9 @@ class unsigned_orientation {
   static constexpr int descriptor_size = num_bins * num_bins * num_angles;
   /// `distance` is Euclidean, as the wrapped descriptor's (whole-field fast paths apply).
   static constexpr bool euclidean_distance = true;
+  /// Folded histograms renormalised by the wrapped rule: the wrapped descriptor's range
+  /// (concept.hpp, H5).
+  static constexpr bool byte_quantizable = true;
 
   /// The wrapped descriptor's default configuration (`Sift::default_params()`).
   unsigned_orientation() = default;

@@ -100,8 +100,9 @@ enum class descriptor_storage {
   /// touch's descriptors quantised alike, distances from exact integer dot products: a quarter
   /// of the bytes a touch streams. Elements above 0.5 are clamped at 127 (counted:
   /// `quantization_clamped()`); a negative element is refused at preparation. Applies to
-  /// per-window features of a Euclidean descriptor (dense_sift); other configurations keep
-  /// float32 (`stores_quantized()` tells).
+  /// per-window features of a descriptor that declares such values (`byte_quantizable`,
+  /// descriptor/concept.hpp H5: dense_sift); other configurations and descriptors keep float32
+  /// (`stores_quantized()` tells).
   int8,
 };
 
@@ -128,8 +129,10 @@ struct descriptor_likelihood_params {
   /// matched with the multiply-adds of one (distances are unchanged by the basis). Needs a
   /// descriptor with a contrast permutation (dense_sift), aligned pairing and contrast as_is.
   bool both_signs = false;
-  /// How the per-window descriptors are stored. paper: float32.
-  descriptor_storage storage = descriptor_storage::float32;
+  /// How the per-window descriptors are stored. int8: as many sequences localized as float32
+  /// in tacmap-evaluate with classic_sift (realistic scenario, seeds 1-3), a quarter of the
+  /// bytes per touch (README, "Performance"). paper: float32.
+  descriptor_storage storage = descriptor_storage::int8;
 
   /// The paper's configuration: all pairs (eq. (1)), inverse likelihood (eq. (2)), per window,
   /// float descriptors.
@@ -823,7 +826,7 @@ descriptor_likelihood<Descriptor>::descriptor_likelihood(Descriptor descriptor,
   params.validate();
   const Eigen::Index p = descriptor_.patch_size();
   offsets_ = detail::checked_patch_offsets("descriptor_likelihood", map, window, p, params.spacing);
-  if constexpr (euclidean_descriptor<Descriptor> && std::is_same_v<scalar_type, float>)
+  if constexpr (byte_quantizable_descriptor<Descriptor> && std::is_same_v<scalar_type, float>)
     quantized_ = params.storage == descriptor_storage::int8 &&
                  params.features == window_features::per_window;
   {

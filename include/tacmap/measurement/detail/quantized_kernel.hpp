@@ -262,25 +262,69 @@ void tile_dots_portable(const quantized_tiles& f, Eigen::Index t, const quantize
 // Per 32-byte row and descriptor: vpmaddubsw (u8 map x s8 touch -> 16 int16 pair sums, exact:
 // see the top of this file) and vpmaddwd with ones (-> 8 int32 sums of 4 products, one per
 // position). `gb`: each descriptor's 4-element groups broadcast to 8 int32 lanes.
-template <std::size_t Count, class A>
-void tile_dots_avx2(const quantized_tiles& f, Eigen::Index t, const std::int32_t* gb,
-                    std::int32_t (&dot)[Count][quantized_tiles::width]) {
+//
+// Whole tiles are finished in registers too, with the operations of `finish_tile` in its order
+// (exact integers, one float multiply, a correctly rounded sqrt, the same sums): the same bits.
+// Scalar, the finish (8 square roots per tile) cost as much as the dot products. The last,
+// partial tile goes the portable way.
+// Tiles whole tiles from t0 on against descriptors [j0, j0 + Count): several tiles at once, so
+// that each broadcast row of the touch is loaded once for all of them and more loads of the
+// map are in flight (measured: one tile at a time was bound by its loads' latency).
+template <std::size_t Tiles, std::size_t Count, class A>
+void block_avx2(const quantized_tiles& f, const quantized_query& g, Eigen::Index j0,
+                Eigen::Index t0, const std::int32_t* gb, float* const* out, bool sum, bool add,
+                Eigen::Index origin) {
   const Eigen::Index rows = f.rows();
-  const std::uint8_t* tile = f.tile(t);
   const __m256i ones = _mm256_set1_epi16(1);
-  __m256i acc[Count];
-  for (std::size_t j = 0; j < Count; ++j) acc[j] = _mm256_setzero_si256();
+  const std::uint8_t* tile[Tiles];
+  __m256i acc[Tiles][Count];
+  for (std::size_t i = 0; i < Tiles; ++i) {
+    tile[i] = f.tile(t0 + static_cast<Eigen::Index>(i));
+    for (std::size_t j = 0; j < Count; ++j) acc[i][j] = _mm256_setzero_si256();
+  }
+  // The map's bytes of the block after next, a row's share at a time (see the caller's note).
+  const char* ahead = reinterpret_cast<const char*>(tile[0]) +
+                      2 * static_cast<Eigen::Index>(Tiles) * rows * quantized_tiles::row_bytes;
+  constexpr auto row_share = static_cast<Eigen::Index>(Tiles) * quantized_tiles::row_bytes;
   for (Eigen::Index r = 0; r < rows; ++r) {
-    const __m256i v =
-        _mm256_load_si256(reinterpret_cast<const __m256i*>(tile + r * quantized_tiles::row_bytes));
-    for (std::size_t j = 0; j < Count; ++j) {
-      const __m256i gj = _mm256_load_si256(reinterpret_cast<const __m256i*>(
+    for (Eigen::Index b = 0; b < row_share; b += 64)
+      _mm_prefetch(ahead + r * row_share + b, _MM_HINT_T0);
+    __m256i gr[Count];
+    for (std::size_t j = 0; j < Count; ++j)
+      gr[j] = _mm256_load_si256(reinterpret_cast<const __m256i*>(
           gb + (static_cast<Eigen::Index>(j) * rows + r) * quantized_tiles::width));
-      acc[j] = _mm256_add_epi32(acc[j], _mm256_madd_epi16(_mm256_maddubs_epi16(v, gj), ones));
+    for (std::size_t i = 0; i < Tiles; ++i) {
+      const __m256i v = _mm256_load_si256(
+          reinterpret_cast<const __m256i*>(tile[i] + r * quantized_tiles::row_bytes));
+      for (std::size_t j = 0; j < Count; ++j)
+        acc[i][j] =
+            _mm256_add_epi32(acc[i][j], _mm256_madd_epi16(_mm256_maddubs_epi16(v, gr[j]), ones));
     }
   }
-  for (std::size_t j = 0; j < Count; ++j)
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dot[j]), acc[j]);
+  const __m256 inverse_square = _mm256_set1_ps(1.0F / (quantization_scale * quantization_scale));
+  for (std::size_t i = 0; i < Tiles; ++i) {
+    const Eigen::Index first = (t0 + static_cast<Eigen::Index>(i)) * quantized_tiles::width;
+    const __m256i nf =
+        _mm256_load_si256(reinterpret_cast<const __m256i*>(f.squared_norms_from(first)));
+    __m256 total = _mm256_setzero_ps();
+    for (std::size_t j = 0; j < Count; ++j) {
+      const auto jj = j0 + static_cast<Eigen::Index>(j);
+      const __m256i both =
+          _mm256_add_epi32(nf, _mm256_set1_epi32(g.norms[static_cast<std::size_t>(jj)]));
+      const __m256i d2 = _mm256_sub_epi32(both, _mm256_slli_epi32(acc[i][j], 1));
+      const __m256 d = _mm256_sqrt_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(d2), inverse_square));
+      if (sum) {
+        total = j == 0 ? d : _mm256_add_ps(total, d);
+      } else {
+        float* o = out[jj] + first - origin;
+        _mm256_storeu_ps(o, add ? _mm256_add_ps(_mm256_loadu_ps(o), d) : d);
+      }
+    }
+    if (sum) {
+      float* o = out[0] + first - origin;
+      _mm256_storeu_ps(o, add ? _mm256_add_ps(_mm256_loadu_ps(o), total) : total);
+    }
+  }
 }
 #endif
 
@@ -318,8 +362,15 @@ void tiles(const quantized_tiles& f, const quantized_query& g, Eigen::Index j0, 
                     four);
       }
     }
-    for (Eigen::Index t = range.begin; t < end; ++t) {
-      tile_dots_avx2<Count, A>(f, t, gb.data(), dot);
+    constexpr std::size_t per_block = Count == 1 ? 4 : 2;
+    constexpr auto step = static_cast<Eigen::Index>(per_block);
+    const Eigen::Index whole = std::min(end, f.positions() / quantized_tiles::width);
+    Eigen::Index t = range.begin;
+    for (; t + step <= whole; t += step)
+      block_avx2<per_block, Count, A>(f, g, j0, t, gb.data(), out, sum, add, origin);
+    for (; t < whole; ++t) block_avx2<1, Count, A>(f, g, j0, t, gb.data(), out, sum, add, origin);
+    for (; t < end; ++t) {  // the partial last tile
+      tile_dots_portable<Count, A>(f, t, g, j0, dot);
       finish_tile<Count, A>(f, g, j0, dot, t * quantized_tiles::width, out, sum, add, origin);
     }
 #endif
