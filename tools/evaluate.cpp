@@ -330,6 +330,11 @@ int main(int argc, char** argv) try {
                  "fault: the sensor is put down elsewhere at this touch, odometry as usual "
                  "(1-based; 0 = none)");
   std::vector<double> lost_probabilities;  // empty: the configuration's default
+  std::vector<std::string> storages;       // empty: the configuration's default
+  app.add_option("--storage", storages,
+                 "per-window descriptors of the planar descriptor models: float32, int8 "
+                 "(comma-separated to compare; default: the model's)")
+      ->delimiter(',');
   app.add_option("--lost-probability", lost_probabilities,
                  "probability that a move lands the sensor anywhere (robust_motion; "
                  "comma-separated to compare; default: the configuration's)")
@@ -541,6 +546,20 @@ int main(int argc, char** argv) try {
   };
   expand(lost_probabilities,
          [](tacmap::localization_config& c, double v) { c.lost_probability = v; });
+  if (!storages.empty()) {
+    std::vector<tacmap::localization_config> expanded;
+    for (const auto& name : storages) {
+      const auto storage = parse_choice<tacmap::descriptor_storage>(
+          "--storage", name,
+          {{"float32", tacmap::descriptor_storage::float32},
+           {"int8", tacmap::descriptor_storage::int8}});
+      for (auto c : configs) {
+        c.storage = storage;
+        expanded.push_back(c);
+      }
+    }
+    configs = std::move(expanded);
+  }
   for (auto& c : configs) c.wide_sigma_mm = wide_sigma;
   expand(wide_probabilities,
          [](tacmap::localization_config& c, double v) { c.wide_probability = v; });

@@ -118,6 +118,9 @@ struct localizer_config {
   pairing pairs = pairing::aligned;                        ///< descriptor models only
   likelihood_shape shape = likelihood_shape::exponential;  ///< descriptor models only
   window_features features = window_features::per_window;  ///< descriptor models only
+  /// How the planar descriptor model stores its per-window descriptors (issue 14); the
+  /// descriptor model's default. The paper: float32.
+  descriptor_storage storage = descriptor_likelihood_params{}.storage;
   /// Temperature: exponential shape (descriptor distance units) or NCC (log p = ncc / tau).
   /// Empty: `default_classic_tau` for the planar classic_sift model with the exponential shape
   /// (the default), else the model's own default (descriptor 0.15, NCC 0.1); see `planar_tau()`.
@@ -181,6 +184,7 @@ struct localizer_config {
     c.pairs = pairing::all_pairs;
     c.shape = likelihood_shape::inverse;
     c.features = window_features::per_window;
+    c.storage = descriptor_storage::float32;
     c.appearance = appearance_handling::fixed;
     c.lost_probability = 0.0;
     c.wide_probability = 0.0;
@@ -284,6 +288,9 @@ struct localizer_config {
     }
     if (patch_spacing && model != measurement_kind::ncc)
       out += "/spacing=" + std::to_string(*patch_spacing);
+    if (storage != descriptor_likelihood_params{}.storage && model != measurement_kind::ncc &&
+        headings == 0)
+      out += storage == descriptor_storage::int8 ? "/int8" : "/float32";
     if (appearance != appearance_handling::fixed) out += std::string("/") + to_string(appearance);
     if (appearance_switch) {
       std::ostringstream t;
@@ -418,6 +425,7 @@ class configured_measurement {
     p.pairs = config.pairs;
     p.shape = config.shape;
     p.features = config.features;
+    p.storage = config.storage;
     if (const auto tau = config.planar_tau()) p.tau = *tau;
     if (const auto spacing = config.planar_patch_spacing()) p.spacing = *spacing;
     p.tempering = config.tempering;
