@@ -624,7 +624,9 @@ class TestDocumentation(unittest.TestCase):
         self.assertIn("'sift_lite'", tacmap.LocalizerConfig.model.__doc__)
         self.assertIn("'localized'", tacmap.TouchResult.verdict.__doc__)
         cfg = tacmap.LocalizerConfig.paper()
-        self.assertEqual(cfg.name(), "sift_lite/all_pairs/inverse/per_window/lost=0/wide=0x3mm")
+        # The paper's floats are named: 7-bit storage is the descriptor model's default.
+        self.assertEqual(cfg.name(),
+                         "sift_lite/all_pairs/inverse/per_window/float32/lost=0/wide=0x3mm")
         self.assertIn("model='sift_lite'", repr(cfg))
         cfg.preprocessing.min_peak = 123.0  # nested parameters are attributes of the config
         self.assertEqual(cfg.preprocessing.min_peak, 123.0)
