@@ -111,6 +111,18 @@ TEST_CASE_TEMPLATE_DEFINE("tacmap descriptor conformance", D, tacmap_descriptor_
     }
   }
 
+  if constexpr (tacmap::byte_quantizable_descriptor<D>) {
+    SUBCASE("H5: a descriptor that declares byte_quantizable has elements >= 0, rarely > 0.5") {
+      // descriptor_storage::int8 stores round(254 v) in [0, 127]: a negative element is refused
+      // at preparation, elements above 0.5 are clamped (counted); a few, not most.
+      const tacmap::image<T> img = tacmap::testing::conformance_image(40, 36, 6).template cast<T>();
+      const auto f = d.compute(img);
+      CHECK(f.values.minCoeff() >= T(0));
+      const auto above = (f.values > T(0.5)).count();
+      CHECK(above * 100 <= f.values.size());
+    }
+  }
+
   if constexpr (tacmap::samples_on_grid<D>) {
     SUBCASE("H2: sample() gives compute()'s columns on the spacing grid, row-major") {
       const tacmap::image<T> img = tacmap::testing::conformance_image(42, 29, 5).template cast<T>();
