@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <tuple>
 #include <type_traits>
@@ -182,6 +183,7 @@ class bayes_filter {
   /// Back to the uniform belief (no knowledge of where the sensor is). Over a `library_grid`:
   /// each object's prior (`object_prior()`) spread evenly over its states.
   void reset() {
+    tracked_box_.reset();
     if constexpr (library_state_grid<Grid>) {
       for (Eigen::Index k = 0; k < grid_.objects(); ++k)
         belief_.segment(grid_.object_offset(k), grid_.object_size(k))
@@ -220,10 +222,17 @@ class bayes_filter {
                    "; expected a positive, finite total (it is normalised for you)");
     normalise(scratch_, total);
     belief_.swap(scratch_);
+    tracked_box_.reset();
   }
 
   /// Control update with odometry `u`. If the motion model throws (invalid odometry, all mass
-  /// off the grid) the exception propagates and the belief is unchanged.
+  /// off the grid) the exception propagates and the belief is unchanged. In tracking mode, right
+  /// after a tracked update and with a motion model that `moves_box` (odometry_gaussian), only
+  /// the mass inside the bounding box of that update's support is moved; the states outside
+  /// keep their values (their mass r <= epsilon up to float rounding, see `tracking_params`):
+  ///   TV(this prediction, the whole grid's) <= r
+  /// (the report's `windowed` and `tracking_error_bound`). The whole grid moves otherwise, and
+  /// when the moved mass would reach the grid's edge.
   prediction_report predict(const control_type& u);
 
   /// Measurement update with measurement `z`, through the measurement model. With tracking on
@@ -239,6 +248,7 @@ class bayes_filter {
   void set_tracking(const tracking_params& params) {
     params.validate();
     tracking_ = params;
+    tracked_box_.reset();
   }
   [[nodiscard]] const tracking_params& tracking() const { return tracking_; }
 
@@ -426,6 +436,7 @@ class bayes_filter {
           "The belief is unchanged; call reset() to start again from a uniform belief");
     normalise(scratch_, total);
     belief_.swap(scratch_);
+    tracked_box_.reset();
     // sums.likelihood >= 1 (the maximum's own factor), so the logarithm is finite.
     const double log_evidence = std::log(total);
     return {.log_evidence = log_evidence,
@@ -462,6 +473,14 @@ class bayes_filter {
   belief_type log_likelihood_;
   tracking_params tracking_;
   std::vector<state_range> support_;  // tracking: the states evaluated
+  // Tracking: after a tracked update on a single-layer grid, the bounding box of its support on
+  // the belief image and a bound on the posterior's mass outside it (what the next predict may
+  // leave in place); empty once the belief changed any other way.
+  struct tracked_box {
+    grid_box box;
+    double outside = 0.0;
+  };
+  std::optional<tracked_box> tracked_box_;
   // Position statistics (coordinates cached once): one per object for library grids.
   std::vector<statistics_type> stats_;
 };
@@ -492,6 +511,24 @@ bayes_filter<Grid, Motion, Measurement>::bayes_filter(Grid grid, Motion motion,
 
 template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
 prediction_report bayes_filter<Grid, Motion, Measurement>::predict(const control_type& u) {
+  if constexpr (moves_box<Motion, Grid>) {
+    // The states outside the box hold r <= epsilon (tracked_update): moving only the box keeps
+    // the prediction within TV r of the whole grid's (the outside's exact prediction and its
+    // value left in place both have mass <= r), for a few hundred states instead of all of them.
+    // A support spread over the map (several repeats of a texture) has a box as wide as the
+    // grid: moving it would cost more than the whole grid's passes.
+    const auto small = [&](const grid_box& b) {
+      return static_cast<double>(b.rows * b.cols) <=
+             tracking_.max_support * static_cast<double>(grid_.size());
+    };
+    if (tracked_box_ && tracked_box_->outside <= tracking_.epsilon * (1.0 + 1e-4) &&
+        small(tracked_box_->box) && motion_.predict_box(grid_, belief_, tracked_box_->box, u)) {
+      const double bound = tracked_box_->outside;
+      tracked_box_.reset();
+      return {.mass_lost = 0.0, .windowed = true, .tracking_error_bound = bound};
+    }
+  }
+  tracked_box_.reset();
   const prediction_report report = motion_.predict(grid_, belief_, scratch_, u);
   // A user's motion model that breaks its contract must not poison the belief.
   const double total = static_cast<double>(scratch_.sum());
@@ -507,6 +544,7 @@ prediction_report bayes_filter<Grid, Motion, Measurement>::predict(const control
 
 template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
 update_report bayes_filter<Grid, Motion, Measurement>::update(const measurement_type& z) {
+  tracked_box_.reset();
   update_path fallback = update_path::full;
   if constexpr (measures_on_states<Measurement, Grid> &&
                 !detail::measures_given_prediction<Measurement, Grid>) {
@@ -600,6 +638,23 @@ update_path bayes_filter<Grid, Motion, Measurement>::tracked_update(const measur
     for (const state_range& r : in)
       belief_.segment(r.begin, r.end - r.begin) =
           scratch_.segment(r.begin, r.end - r.begin) * scale;
+    if (n == grid_.rows() * grid_.cols()) {
+      // The support's bounding box for the next predict; the posterior's mass outside the
+      // support, s.outside * outside_factor / total, is at most epsilon (outside_factor is at
+      // most every factor inside): the states outside the box hold no more.
+      const Eigen::Index cols = grid_.cols();
+      Eigen::Index r0 = n, r1 = -1, c0 = cols, c1 = -1;
+      for (const state_range& r : in) {
+        const Eigen::Index first = r.begin / cols, last = (r.end - 1) / cols;
+        r0 = std::min(r0, first);
+        r1 = std::max(r1, last);
+        c0 = std::min(c0, first == last ? r.begin % cols : Eigen::Index{0});
+        c1 = std::max(c1, first == last ? (r.end - 1) % cols : cols - 1);
+      }
+      if (r1 >= r0)
+        tracked_box_ =
+            tracked_box{{r0, c0, r1 - r0 + 1, c1 - c0 + 1}, outside * outside_factor * inverse};
+    }
     const double log_evidence = std::log(sums.posterior);
     report = {.log_evidence = log_evidence,
               .log_likelihood_max = static_cast<double>(top),

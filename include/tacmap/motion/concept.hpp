@@ -11,6 +11,21 @@ namespace tacmap {
 struct prediction_report {
   /// Fraction of belief mass (0..1) that the motion carried off the grid before renormalising.
   double mass_lost = 0.0;
+  /// Tracking mode (`bayes_filter::set_tracking`): only the mass inside the last tracked
+  /// update's support box was moved (`moves_box`); the rest stayed where it was.
+  bool windowed = false;
+  /// When `windowed`: a bound on the total-variation distance to the whole-grid prediction of
+  /// the same belief (the mass left outside the box); 0 otherwise.
+  double tracking_error_bound = 0.0;
+};
+
+/// A rectangle of a single-layer grid's belief image: rows [row, row + rows), columns
+/// [col, col + cols).
+struct grid_box {
+  Eigen::Index row = 0;
+  Eigen::Index col = 0;
+  Eigen::Index rows = 0;
+  Eigen::Index cols = 0;
 };
 
 /// The control update bel_bar(x_t) = sum over x_{t-1} of p(x_t | u_t, x_{t-1}) bel(x_{t-1}),
@@ -42,6 +57,20 @@ concept motion_model = state_grid<G> &&
     requires(const M& m, const G& g, const belief_array<G>& in, belief_array<G>& out,
              const typename M::control_type& u) {
   { m.predict(g, in, out, u) } -> std::same_as<prediction_report>;
+};
+
+/// Motion models that can move part of a belief in place (tracking mode): for a `const M m`, a
+/// `const G g`, a normalised `belief_array<G> b`, a `grid_box box` inside the belief image and a
+/// control `u`, `m.predict_box(g, b, box, u)` replaces the mass inside `box` by its prediction,
+/// exactly as `predict` would move it, leaves every state outside `box` unchanged and returns
+/// true; or returns false with `b` unchanged when it cannot (the moved mass would reach the
+/// grid's edge, a control `predict` would refuse): the caller then predicts the whole grid.
+/// `b`'s sum changes only by rounding (no renormalisation: no mass may leave the grid).
+template <class M, class G>
+concept moves_box = motion_model<M, G> &&
+    requires(const M& m, const G& g, belief_array<G>& b, const grid_box& box,
+             const typename M::control_type& u) {
+  { m.predict_box(g, b, box, u) } -> std::same_as<bool>;
 };
 
 }  // namespace tacmap

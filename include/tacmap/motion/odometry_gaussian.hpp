@@ -212,6 +212,48 @@ class odometry_gaussian {
     });
   }
 
+  /// Tracking mode (`moves_box`): the mass inside `box` moved as `predict` moves it, in place;
+  /// every state outside `box` keeps its value. The box is copied, with R + 1 zero cells on each
+  /// side (the reach of the stencil and the bilinear split), into a small window that is
+  /// transported by the shift's fraction only and added back at the box's place moved by the
+  /// integer part: each output is the same weighted sum of the same taps as in `predict`, less
+  /// the taps that read outside the box. False, `belief` unchanged, when that window would reach
+  /// past the grid's edge (where `predict` drops or clamps mass) or the odometry is not finite.
+  template <metric_planar_grid G>
+  bool predict_box(const G& grid, belief_array<G>& belief, const grid_box& box,
+                   const odometry& u) const {
+    using T = typename G::scalar_type;
+    if (!(std::isfinite(u.dx_mm) && std::isfinite(u.dy_mm))) return false;
+    const Eigen::Index rows = grid.rows(), cols = grid.cols();
+    if (grid.size() != rows * cols || belief.size() != grid.size()) return false;
+    TACMAP_ASSERT(box.rows > 0 && box.cols > 0 && box.row >= 0 && box.col >= 0 &&
+                      box.row + box.rows <= rows && box.col + box.cols <= cols,
+                  "predict_box: the box must lie inside the belief image");
+    const double sx = u.dx_mm / grid.mm_per_px(), sy = u.dy_mm / grid.mm_per_px();
+    const double fx_floor = std::floor(sx), fy_floor = std::floor(sy);
+    if (!(std::abs(fx_floor) < static_cast<double>(cols) &&
+          std::abs(fy_floor) < static_cast<double>(rows)))
+      return false;
+    const Eigen::Index pad = radius_ + 1;
+    const Eigen::Index h = box.rows + 2 * pad, w = box.cols + 2 * pad;
+    const Eigen::Index top = box.row - pad + static_cast<Eigen::Index>(fy_floor);
+    const Eigen::Index left = box.col - pad + static_cast<Eigen::Index>(fx_floor);
+    if (top < 0 || left < 0 || top + h > rows || left + w > cols) return false;
+    separable_scratch<T>& s = workspace<T>();
+    s.box_in.setZero(h * w);
+    s.box_out.resize(h * w);
+    Eigen::Map<image<T>> in_box(s.box_in.data(), h, w);
+    Eigen::Map<image<T>> img(belief.data(), rows, cols);
+    auto source = img.block(box.row, box.col, box.rows, box.cols);
+    in_box.block(pad, pad, box.rows, box.cols) = source;
+    Eigen::Map<image<T>> out_box(s.box_out.data(), h, w);
+    transport(Eigen::Map<const image<T>>(s.box_in.data(), h, w), out_box, sx - fx_floor,
+              sy - fy_floor, grid.mm_to_px(params_.sigma_mm));
+    source.setZero();
+    img.block(top, left, h, w) += out_box;
+    return true;
+  }
+
   /// The un-normalised core of `predict` for one belief image: out = in shifted by
   /// (shift_x_px, shift_y_px) (bilinear for the fraction) and spread by the Gaussian stencil of
   /// `sigma_px`; mass leaving the image is dropped or clamped per `params().boundary`, never
@@ -300,6 +342,8 @@ class odometry_gaussian {
     std::vector<const T*> sources;                   // per kept tap: its source at row 0
     std::vector<const T*> row_sources;               // the same at the current row
     std::vector<T> weights;
+    Eigen::Array<T, Eigen::Dynamic, 1> box_in;   // predict_box: the box with zero margins
+    Eigen::Array<T, Eigen::Dynamic, 1> box_out;  // its prediction, added back in place
   };
   template <class T>
   separable_scratch<T>& workspace() const {
