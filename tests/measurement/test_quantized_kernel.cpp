@@ -190,3 +190,46 @@ TEST_CASE("quantize: clamps are counted, never NaN or an out-of-range byte") {
   tacmap::detail::quantized_distances(tiles, q, &o, true, false);
   for (Eigen::Index p = 0; p < 3; ++p) CHECK(std::isfinite(d(p)));
 }
+
+TEST_CASE("quantized_tiles::set_columns stores what quantize gives, element for element") {
+  // set_columns quantises a column at a time with vectorised expressions; quantize is the
+  // scalar definition. Every rounding tie k + 0.5, its neighbours one ulp away, the clamp's
+  // edges, NaN, infinity, zero and denormals, in columns of a dimension that is not a multiple
+  // of the 4-byte groups.
+  using tacmap::detail::quantization_scale;
+  using tacmap::detail::quantize;
+  std::vector<float> values;
+  for (int k = 0; k <= 130; ++k) {
+    const float tie = (static_cast<float>(k) + 0.5F) / quantization_scale;
+    values.insert(values.end(), {tie, std::nextafter(tie, 0.0F), std::nextafter(tie, 2.0F),
+                                 static_cast<float>(k) / quantization_scale});
+  }
+  values.insert(values.end(),
+                {0.0F, -0.0F, std::numeric_limits<float>::denorm_min(), 0.5F, 0.501F, 0.51F, 1.0F,
+                 std::numeric_limits<float>::max(), std::numeric_limits<float>::infinity(),
+                 std::numeric_limits<float>::quiet_NaN()});
+  const Eigen::Index dim = 7;
+  const auto n = static_cast<Eigen::Index>((values.size() + dim - 1) / dim);
+  values.resize(static_cast<std::size_t>(n * dim), 0.25F);
+  const Eigen::Map<const Eigen::ArrayXXf> columns(values.data(), dim, n);
+  quantized_tiles tiles(n + 3, dim);
+  REQUIRE(tiles.set_columns(3, columns));
+  std::uint64_t clamped = 0;
+  for (Eigen::Index q = 0; q < n; ++q) {
+    std::int32_t norm = 0;
+    for (Eigen::Index k = 0; k < dim; ++k) {
+      const auto expected = quantize(columns(k, q), 0);
+      CAPTURE(columns(k, q));
+      CHECK(tiles.at(3 + q, k) == expected.value);
+      clamped += expected.clamped ? 1U : 0U;
+      norm += expected.value * expected.value;
+    }
+    CHECK(*tiles.squared_norms_from(3 + q) == norm);
+  }
+  CHECK(tiles.clamped() == clamped);
+  // A negative element anywhere in a column is refused.
+  Eigen::ArrayXXf negative = Eigen::ArrayXXf::Constant(dim, 2, 0.1F);
+  negative(6, 1) = -1e-30F;
+  quantized_tiles refused(2, dim);
+  CHECK_FALSE(refused.set_columns(0, negative));
+}

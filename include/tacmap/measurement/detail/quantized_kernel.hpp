@@ -83,18 +83,35 @@ class quantized_tiles {
   /// is refused (returns false and stores nothing more): the map side is unsigned.
   template <class Derived>
   [[nodiscard]] bool set_columns(Eigen::Index q0, const Eigen::DenseBase<Derived>& columns) {
+    // A column at a time through contiguous scratch: the conversion loop then vectorises, and
+    // each group of 4 bytes is stored as one word (the tile's rows are 32 bytes apart).
+    values_.resize(static_cast<std::size_t>(rows_ * group));
+    codes_.assign(static_cast<std::size_t>(rows_ * group), 0);
     for (Eigen::Index j = 0; j < columns.cols(); ++j) {
       const Eigen::Index q = q0 + j;
+      // `quantize(v, 0)` as whole-column Eigen expressions (vectorised: 30 -> 11-14 ms of CPU
+      // for a 120 px map's 3 million elements, issue 14; a branch-free scalar loop measured
+      // 21 ms). The tests compare it with the scalar function.
+      Eigen::Map<Eigen::ArrayXf> x(values_.data(), dim_);
+      x = columns.col(j).template cast<float>() * quantization_scale;
+      if ((x < 0.0F).any()) return false;
+      Eigen::Map<Eigen::ArrayXi> code(codes_.data(), dim_);
+      const auto clamped =
+          static_cast<std::uint64_t>((x >= 127.5F || x != x).count());  // x != x: NaN
+      x = (x >= 0.0F).select(x.min(127.0F), 0.0F);                      // NaN -> 0
+      code = x.cast<std::int32_t>();                                    // trunc = floor
+      code += (x - code.cast<float>() >= 0.5F).cast<std::int32_t>();
+      const std::int32_t norm = code.square().sum();
+      const std::int32_t* c = codes_.data();
       std::uint8_t* lane = data_.data() + (q / width) * rows_ * row_bytes + (q % width) * group;
-      std::int32_t norm = 0;
-      for (Eigen::Index k = 0; k < dim_; ++k) {
-        const float v = static_cast<float>(columns(k, j));
-        if (v < 0.0F) return false;
-        const quantized_value c = quantize(v, 0);
-        clamped_ += c.clamped ? 1U : 0U;
-        lane[(k / group) * row_bytes + k % group] = static_cast<std::uint8_t>(c.value);
-        norm += c.value * c.value;
+      for (Eigen::Index r = 0; r < rows_; ++r) {
+        const std::int32_t* g = c + r * group;  // past dim_: zeros (codes_ is zero-filled)
+        const std::uint8_t bytes[group] = {
+            static_cast<std::uint8_t>(g[0]), static_cast<std::uint8_t>(g[1]),
+            static_cast<std::uint8_t>(g[2]), static_cast<std::uint8_t>(g[3])};
+        std::memcpy(lane + r * row_bytes, bytes, group);
       }
+      clamped_ += clamped;
       norms_[static_cast<std::size_t>(q)] = norm;
     }
     return true;
@@ -131,6 +148,9 @@ class quantized_tiles {
   Eigen::Index dim_ = 0;
   Eigen::Index rows_ = 0;
   std::uint64_t clamped_ = 0;
+  // set_columns' scratch: one column as floats and as codes (rows_ * group, zero past dim_).
+  std::vector<float> values_;
+  std::vector<std::int32_t> codes_;
   // 64-byte aligned: the AVX2 kernel loads whole rows aligned.
   std::vector<std::uint8_t, xsimd::aligned_allocator<std::uint8_t, 64>> data_;
   std::vector<std::int32_t, xsimd::aligned_allocator<std::int32_t, 64>> norms_;
