@@ -77,7 +77,20 @@ TEST_CASE_TEMPLATE("an image and its negative have the same unsigned descriptors
   const auto a = d.compute(img);
   const auto b = d.compute(neg);
   REQUIRE(a.values.cols() == b.values.cols());
-  CHECK((a.values - b.values).abs().maxCoeff() <= 1e-5F);
+  // Equal within rounding, except where a folded descriptor's norm sits on the wrapped rule's
+  // threshold (1): there the last rounding bit, which differs between the two images' and
+  // between instruction sets' arithmetic, decides whether it is normalised and clamped. Such a
+  // column has norm ~1 on both sides; a wrong fold would differ on weak columns too.
+  const double threshold = d.params().norm_threshold;
+  Eigen::Index at_threshold = 0;
+  for (Eigen::Index q = 0; q < a.values.cols(); ++q) {
+    if ((a.values.col(q) - b.values.col(q)).abs().maxCoeff() <= 1e-5F) continue;
+    CAPTURE(q);
+    CHECK(std::abs(static_cast<double>(a.values.col(q).matrix().norm()) - threshold) <= 1e-4);
+    CHECK(std::abs(static_cast<double>(b.values.col(q).matrix().norm()) - threshold) <= 1e-4);
+    ++at_threshold;
+  }
+  CHECK(at_threshold * 100 <= a.values.cols());
   // ... where the signed descriptors differ: the test sees the contrast reversal at all.
   const D signed_d;
   CHECK((signed_d.compute(img).values - signed_d.compute(neg).values).abs().maxCoeff() > 0.1F);
