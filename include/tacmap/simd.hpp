@@ -98,8 +98,8 @@ struct precompiled_kernels {
                                      Eigen::Index first, Eigen::Index count, float* out, bool add,
                                      tile_range range);
   /// Distances to descriptors stored as 7-bit integers (quantized_kernel.hpp; issue 14).
-  void (*quantized_distances)(const quantized_tiles& f, const quantized_query& g,
-                              float* const* out, bool sum, bool add, tile_range range);
+  void (*quantized_distances)(const quantized_tiles& f, const quantized_query& g, float* const* out,
+                              bool sum, bool add, tile_range range);
 };
 
 // Defined in tacmap::precompiled (src/simd_dispatch.cpp); declared for every translation unit,
