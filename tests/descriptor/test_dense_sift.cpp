@@ -726,3 +726,42 @@ TEST_CASE("compute on a wide image equals describe_at at scattered positions") {
   }
   CHECK(worst <= 1e-5);
 }
+
+TEST_CASE("compute's running sums do not drift: long rows and columns, a saturated edge, flat") {
+  // compute pools with running box sums (detail::dsift::box_pooler). In float they would round at
+  // the scale of the largest sum seen and leave a residue after it; in integers they are exact.
+  // The extremes: the largest channel values the image scaling allows (a 0/1 checkerboard, every
+  // gradient saturated) at one end of a 1200 px line, exact zeros across the middle, a faint
+  // texture (1e-3 of the maximum: weak descriptors, compared unnormalised) at the far end.
+  const sift_lite d;
+  constexpr Eigen::Index length = 1200;
+  constexpr Eigen::Index across = 24;
+  image<float> wide = image<float>::Zero(across, length);
+  std::mt19937 gen(11);
+  std::uniform_real_distribution<float> u(0.0F, 1e-3F);
+  for (Eigen::Index r = 0; r < across; ++r) {
+    for (Eigen::Index c = 0; c < 60; ++c) wide(r, c) = static_cast<float>((r + c) % 2);
+    for (Eigen::Index c = length - 60; c < length; ++c) wide(r, c) = u(gen);
+  }
+  const image<float> tall = wide.transpose();
+  for (const image<float>* img : std::array<const image<float>*, 2>{&wide, &tall}) {
+    const bool is_wide = img == &wide;
+    CAPTURE(is_wide);
+    branch_counts counts;
+    CHECK(max_difference_to_reference(d, *img, counts) <= 1e-5);
+    CHECK(counts.strong > 0);
+    CHECK(counts.weak > 0);
+    // Patches that see only the flat middle are exactly zero, however far the running sums went.
+    const auto field = d.compute(*img);
+    float flat = 0.0F;
+    for (Eigen::Index r = 0; r < field.rows; ++r) {
+      for (Eigen::Index c = 0; c < field.cols; ++c) {
+        const Eigen::Index along = is_wide ? c : r;
+        if (along >= 100 && along <= length - 120) {
+          flat = std::max(flat, field.at(r, c).abs().maxCoeff());
+        }
+      }
+    }
+    CHECK(flat == 0.0F);
+  }
+}

@@ -13,6 +13,7 @@
 #include <numbers>
 #include <span>
 #include <stdexcept>
+#include <type_traits>
 #include <vector>
 
 #include "tacmap/descriptor/concept.hpp"
@@ -220,13 +221,33 @@ class dense_sift {
     // row and column in [0, size - bin]. A patch row needs pooled rows r .. r + (NumBins-1)*bin:
     // a ring of that many rows (about 44 KB for sift_lite on 120 px) instead of all of them.
     const Eigen::Index nx = w - bin_ + 1;
+    descriptor_field<T> field;
+    // Float with the default kernels: exact running box sums (detail::dsift::box_pooler);
+    // otherwise one weighted sum per tap.
+    if constexpr (std::is_same_v<T, float>) {
+      if (detail::dsift::box_pooler<NumAngles>::applies(pooling_, bin_, margin())) {
+        detail::dsift::box_pooler<NumAngles> pool(pooling_, channels.data(), h, w, margin(), bin_,
+                                                  nx);
+        compute_rows(pool, h, w, nx, field);
+        return field;
+      }
+    }
     detail::dsift::row_pooler<NumAngles, T> pool(pooling_, channels.data(), w, margin(), 0, nx);
+    compute_rows(pool, h, w, nx, field);
+    return field;
+  }
+
+ private:
+  /// `compute` after the orientation channels: pooled rows from `pool` (called with increasing
+  /// rows), assembled and normalised one patch row at a time.
+  template <class Pooler>
+  void compute_rows(Pooler& pool, Eigen::Index h, Eigen::Index w, Eigen::Index nx,
+                    descriptor_field<T>& field) const {
     const Eigen::Index ring_rows = (NumBins - 1) * bin_ + 1;
     const Eigen::Index row_size = nx * NumAngles;
     Eigen::Array<T, Eigen::Dynamic, 1> ring(ring_rows * row_size);
     const auto slot = [ring_rows](Eigen::Index y) { return y % ring_rows; };
 
-    descriptor_field<T> field;
     field.rows = h - params_.patch_size + 1;
     field.cols = w - params_.patch_size + 1;
     field.values.resize(descriptor_size, field.rows * field.cols);
@@ -264,9 +285,9 @@ class dense_sift {
         normalise(out, field.cols);
       }
     }
-    return field;
   }
 
+ public:
   /// Number of grid points (rows = down, cols = across) `sample` gives on an image of `size`:
   /// floor((H - patch) / spacing) + 1 by floor((W - patch) / spacing) + 1, or 0 x 0 when the
   /// image is smaller than a patch.
@@ -304,12 +325,27 @@ class dense_sift {
       if (needed[y]) slot[y] = n_rows++;
     }
     const Eigen::Index nx = (grid.width - 1) * s + (NumBins - 1) * bin_ + 1;
-    detail::dsift::row_pooler<NumAngles, T> pool(pooling_, channels.data(), w, margin(), 0, nx);
     const Eigen::Index row_size = nx * NumAngles;
     Eigen::Array<T, Eigen::Dynamic, 1> pooled(n_rows * row_size);
-    for (Eigen::Index y = 0; y < h; ++y) {
-      const Eigen::Index k = slot[static_cast<std::size_t>(y)];
-      if (k >= 0) pool(y, pooled.data() + k * row_size);
+    // The same pooling as `compute`'s, so that every sample is a `compute` column.
+    const auto pool_rows = [&](auto& pool) {
+      for (Eigen::Index y = 0; y < h; ++y) {
+        const Eigen::Index k = slot[static_cast<std::size_t>(y)];
+        if (k >= 0) pool(y, pooled.data() + k * row_size);
+      }
+    };
+    bool pooled_exactly = false;
+    if constexpr (std::is_same_v<T, float>) {
+      if (detail::dsift::box_pooler<NumAngles>::applies(pooling_, bin_, margin())) {
+        detail::dsift::box_pooler<NumAngles> pool(pooling_, channels.data(), h, w, margin(), bin_,
+                                                  nx);
+        pool_rows(pool);
+        pooled_exactly = true;
+      }
+    }
+    if (!pooled_exactly) {
+      detail::dsift::row_pooler<NumAngles, T> pool(pooling_, channels.data(), w, margin(), 0, nx);
+      pool_rows(pool);
     }
 
     descriptor_samples<T> out;
