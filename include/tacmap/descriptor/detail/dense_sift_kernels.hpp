@@ -512,7 +512,6 @@ class box_pooler {
   box_pooler(const std::vector<pooling_tap<float>>& taps, const float* channels, Eigen::Index h,
              Eigen::Index w, Eigen::Index margin, Eigen::Index bin, Eigen::Index nx)
       : channels_(channels),
-        h_(h),
         w_(w),
         margin_(margin),
         bin_(bin),
@@ -577,27 +576,16 @@ class box_pooler {
   std::int32_t* q_row(Eigen::Index r) { return q_.data() + slot(r) * n_; }
   std::int32_t* b_row(Eigen::Index r) { return b_.data() + slot(r) * n_; }
 
-  /// Quantises image row r (zeros outside the image) into its ring slot.
-  void quantise(Eigen::Index r) {
-    std::int32_t* q = q_row(r);
-    if (r < 0 || r >= h_) {
-      std::fill(q, q + n_, 0);
-      return;
-    }
-    const float* c = channels_ + ((r + margin_) * (w_ + 2 * margin_) + margin_) * NumAngles;
-    const batch s(scale_);
-    for (Eigen::Index i = 0; i < n_; i += width) {
-      xsimd::nearbyint_as_int(batch::load_unaligned(c + i) * s).store_unaligned(q + i);
-    }
-  }
-
   /// Vertical sums of the next row y into t_: B(z) = q(z) + ... + q(z + b - 1),
   /// BB(z) = B(z) + ... + B(z + b - 1), pooled(y) = BB(y + 2 - b) + BB(y + 3 - b) - cuts.
   void vertical() {
     const Eigen::Index y = ++y_;
     const Eigen::Index b = bin_;
-    quantise(y + b + 1);
-    const std::int32_t* qn = q_row(y + b + 1);
+    // Row y + b + 1 is quantised in this loop, as it is first read (rows in the channels' zero
+    // margin give zeros): one pass over the channels instead of a separate one.
+    std::int32_t* qn = q_row(y + b + 1);
+    const float* src =
+        channels_ + ((y + b + 1 + margin_) * (w_ + 2 * margin_) + margin_) * NumAngles;
     const std::int32_t* qo = q_row(y + 1);
     const std::int32_t* bp = b_row(y + 1);
     const std::int32_t* bo = b_row(y + 2 - b);
@@ -608,8 +596,11 @@ class box_pooler {
     for (const cut_tap& c : cut_) cut_rows_.push_back(q_row(y + c.offset));
     const auto run = [&](auto one_far_cut) {
       const ibatch half(std::int32_t{1} << (shift_ - 1));
-      for (Eigen::Index i = 0; i < n_; i += width) {
-        const ibatch q_new = ibatch::load_unaligned(qn + i);
+      const batch scale(scale_);
+      const Eigen::Index n = n_;
+      for (Eigen::Index i = 0; i < n; i += width) {
+        const ibatch q_new = xsimd::nearbyint_as_int(batch::load_unaligned(src + i) * scale);
+        q_new.store_unaligned(qn + i);
         const ibatch b_new =
             ibatch::load_unaligned(bp + i) + q_new - ibatch::load_unaligned(qo + i);
         const ibatch bb_old = ibatch::load_unaligned(bb + i);
@@ -688,7 +679,6 @@ class box_pooler {
   }
 
   const float* channels_;
-  Eigen::Index h_;
   Eigen::Index w_;
   Eigen::Index margin_;
   Eigen::Index bin_;
