@@ -527,12 +527,16 @@ class box_pooler {
     const Eigen::Index size = (h + 2 * margin) * (w + 2 * margin) * NumAngles;
     const float top = Eigen::Map<const Eigen::ArrayXf>(channels, size).maxCoeff();
     // A hair below qmax: c * s may round up.
+    // Capped at the largest float: for a largest value below about 1e-31 (only a subnormal
+    // could be) the scale would overflow to infinity and 0 * inf is NaN.
     const double s = top > 0.0F ? static_cast<double>(qmax) * (1.0 - 1e-6) / top : 1.0;
-    scale_ = static_cast<float>(s);
-    // pooled = sum of (W_v / 2b) (W_h / 2b) c, and the horizontal sums count 2^shift_ per unit.
+    scale_ =
+        static_cast<float>(std::min(s, static_cast<double>(std::numeric_limits<float>::max())));
+    // pooled = sum of (W_v / 2b) (W_h / 2b) c, and the horizontal sums count 2^shift_ per unit;
+    // the float scale the quantisation used, not the double it was rounded from.
     const auto unit = static_cast<double>(2 * bin);
-    unscale_ =
-        static_cast<float>(static_cast<double>(std::int64_t{1} << shift_) / (s * unit * unit));
+    unscale_ = static_cast<float>(static_cast<double>(std::int64_t{1} << shift_) /
+                                  (static_cast<double>(scale_) * unit * unit));
     q_.assign(static_cast<std::size_t>(slots_ * n_), 0);
     b_.assign(static_cast<std::size_t>(slots_ * n_), 0);
     bb_.assign(static_cast<std::size_t>(n_), 0);
