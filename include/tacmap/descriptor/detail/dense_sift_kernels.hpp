@@ -480,6 +480,13 @@ class row_pooler {
 ///
 /// Rows are pooled in increasing order (each call continues the running sums; rows may be
 /// skipped, their vertical sums are still taken). Channels: `orientation_channels`' layout.
+///
+/// Bounds: the running sums read b + 1 rows and columns ahead of the value pooled, which the
+/// channels' zero margin (patch / 2: b with two bins per side, 1 px for a 2 px patch) does not
+/// always cover. So the passes never read the channels outside the image: a row below it is
+/// quantised from `zero_row_`, and the row of vertical sums `t_` has its own zero pixels, b + 1
+/// before the image and after it up to the last column the horizontal pass reads. Any h, w,
+/// nx >= 1 and rows y >= 0 pool as the per-tap kernel does, with zeros outside the image.
 template <int NumAngles>
 class box_pooler {
   using batch = xsimd::batch<float, kernel_arch<float>>;
@@ -512,6 +519,7 @@ class box_pooler {
   box_pooler(const std::vector<pooling_tap<float>>& taps, const float* channels, Eigen::Index h,
              Eigen::Index w, Eigen::Index margin, Eigen::Index bin, Eigen::Index nx)
       : channels_(channels),
+        h_(h),
         w_(w),
         margin_(margin),
         bin_(bin),
@@ -540,8 +548,12 @@ class box_pooler {
     q_.assign(static_cast<std::size_t>(slots_ * n_), 0);
     b_.assign(static_cast<std::size_t>(slots_ * n_), 0);
     bb_.assign(static_cast<std::size_t>(n_), 0);
-    const Eigen::Index row = (w + 2 * margin) * NumAngles;
-    t_.assign(static_cast<std::size_t>(row), 0);
+    // t_ spans pixels [-lead_, max(w, nx + b + 1)): the horizontal pass reads t(x + 1) from
+    // x = -b - 1 and t(x + b + 1) (the newest value, and the far cut) up to x = nx - 1.
+    lead_ = bin + 1;
+    const Eigen::Index end = std::max(w, nx + bin + 1);
+    t_.assign(static_cast<std::size_t>((lead_ + end) * NumAngles), 0);
+    zero_row_.assign(static_cast<std::size_t>(n_), 0.0F);
     hb_.assign(static_cast<std::size_t>((nx + 3 * bin + 2) * NumAngles), 0);
     y_ = -bin - 2;  // every sum is zero this far above the image
   }
@@ -585,17 +597,20 @@ class box_pooler {
   void vertical() {
     const Eigen::Index y = ++y_;
     const Eigen::Index b = bin_;
-    // Row y + b + 1 is quantised in this loop, as it is first read (rows in the channels' zero
-    // margin give zeros): one pass over the channels instead of a separate one.
-    std::int32_t* qn = q_row(y + b + 1);
-    const float* src =
-        channels_ + ((y + b + 1 + margin_) * (w_ + 2 * margin_) + margin_) * NumAngles;
+    // Row y + b + 1 is quantised in this loop, as it is first read: one pass over the channels
+    // instead of a separate one. Past the last image row it is zero (the channels' margin may
+    // be shorter than b + 1 rows: patch / 2 >= b only).
+    const Eigen::Index r = y + b + 1;
+    std::int32_t* qn = q_row(r);
+    const float* src = r < h_
+                           ? channels_ + ((r + margin_) * (w_ + 2 * margin_) + margin_) * NumAngles
+                           : zero_row_.data();
     const std::int32_t* qo = q_row(y + 1);
     const std::int32_t* bp = b_row(y + 1);
     const std::int32_t* bo = b_row(y + 2 - b);
     std::int32_t* bn = b_row(y + 2);
     std::int32_t* bb = bb_.data();
-    std::int32_t* t = t_.data() + margin_ * NumAngles;
+    std::int32_t* t = t_.data() + lead_ * NumAngles;
     cut_rows_.clear();
     for (const cut_tap& c : cut_) cut_rows_.push_back(q_row(y + c.offset));
     const auto run = [&](auto one_far_cut) {
@@ -640,7 +655,7 @@ class box_pooler {
   void horizontal(float* out) {
     const Eigen::Index b = bin_;
     const Eigen::Index off = 2 * b;  // hb_ holds B(z) at (z + off) * NumAngles
-    const std::int32_t* t = t_.data() + margin_ * NumAngles;
+    const std::int32_t* t = t_.data() + lead_ * NumAngles;
     std::int32_t* hb = hb_.data() + off * NumAngles;
     const batch unscale(unscale_);
     std::array<ibatch, regs> b_prev;
@@ -683,6 +698,7 @@ class box_pooler {
   }
 
   const float* channels_;
+  Eigen::Index h_;
   Eigen::Index w_;
   Eigen::Index margin_;
   Eigen::Index bin_;
@@ -699,6 +715,8 @@ class box_pooler {
   std::vector<std::int32_t> b_;                ///< ring of first box sums
   std::vector<std::int32_t> bb_;               ///< second box sums of the current row
   std::vector<std::int32_t> t_;   ///< the current row's vertical sums, shifted, zero margins
+  Eigen::Index lead_ = 0;         ///< zero pixels in t_ before the image's first column
+  std::vector<float> zero_row_;   ///< what the rows below the image read: zeros
   std::vector<std::int32_t> hb_;  ///< first horizontal box sums along the row
 };
 
