@@ -765,3 +765,35 @@ TEST_CASE("compute's running sums do not drift: long rows and columns, a saturat
     CHECK(flat == 0.0F);
   }
 }
+
+TEST_CASE(
+    "compute into a reused field and workspace gives compute(img)'s descriptors bit for bit") {
+  // One field and one workspace through images of different sizes and back (the buffers shrink,
+  // grow and are reused), float (box sums) and double (per-tap pooling), and after a scratch
+  // that `describe_at` used (its zero-margin bookkeeping must not leak into the whole-image path).
+  const auto check = [](auto d, auto tag) {
+    using T = decltype(tag);
+    typename decltype(d)::workspace scratch;
+    tacmap::descriptor_field<T> field;
+    const std::array<std::pair<Eigen::Index, Eigen::Index>, 4> sizes{
+        {{40, 52}, {23, 23}, {61, 30}, {40, 52}}};
+    unsigned seed = 3;
+    for (const auto& [rows, cols] : sizes) {
+      CAPTURE(rows);
+      CAPTURE(cols);
+      const image<T> img = random_image<T>(rows, cols, ++seed);
+      const tacmap::grid_cell corner{0, 0};
+      (void)d.describe_at(img, std::span<const tacmap::grid_cell>(&corner, 1), scratch);
+      d.compute(img, field, scratch);
+      const auto fresh = d.compute(img);
+      REQUIRE(field.rows == fresh.rows);
+      REQUIRE(field.cols == fresh.cols);
+      REQUIRE(field.values.rows() == fresh.values.rows());
+      REQUIRE(field.values.cols() == fresh.values.cols());
+      CHECK((field.values == fresh.values).all());
+    }
+  };
+  check(sift_lite{}, float{});
+  check(classic_sift{}, float{});
+  check(dense_sift<2, 8, double>{}, double{});
+}

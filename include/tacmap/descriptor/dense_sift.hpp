@@ -211,29 +211,9 @@ class dense_sift {
   /// cols = W - patch + 1. Throws `std::invalid_argument` when `img` is smaller than a patch or
   /// not finite.
   [[nodiscard]] descriptor_field<T> compute(const image_view<T>& img) const {
-    check_image(img, "compute");
-    const Eigen::Index h = img.rows();
-    const Eigen::Index w = img.cols();
-    Eigen::Array<T, Eigen::Dynamic, 1> channels;
-    orientation_channels(img, channels);
-
-    // Bin b of the patch at top-left t samples the pooled channels at t + b * bin, for every
-    // row and column in [0, size - bin]. A patch row needs pooled rows r .. r + (NumBins-1)*bin:
-    // a ring of that many rows (about 44 KB for sift_lite on 120 px) instead of all of them.
-    const Eigen::Index nx = w - bin_ + 1;
     descriptor_field<T> field;
-    // Float with the default kernels: exact running box sums (detail::dsift::box_pooler);
-    // otherwise one weighted sum per tap.
-    if constexpr (std::is_same_v<T, float>) {
-      if (detail::dsift::box_pooler<NumAngles>::applies(pooling_, bin_, margin())) {
-        detail::dsift::box_pooler<NumAngles> pool(pooling_, channels.data(), h, w, margin(), bin_,
-                                                  nx);
-        compute_rows(pool, h, w, nx, field);
-        return field;
-      }
-    }
-    detail::dsift::row_pooler<NumAngles, T> pool(pooling_, channels.data(), w, margin(), 0, nx);
-    compute_rows(pool, h, w, nx, field);
+    workspace scratch;
+    compute(img, field, scratch);
     return field;
   }
 
@@ -393,6 +373,39 @@ class dense_sift {
     std::vector<detail::dsift::column_span> spans;
     detail::dsift::span_gradient_scratch<T> gradients;
   };
+
+  /// `compute(img)` into `field`, reusing its memory and `scratch`'s: for a caller describing
+  /// many images of one size (camera frames, a map prepared again), no allocation after the
+  /// first. Fresh memory is what a new field costs most at camera resolution: at 640 x 480 the
+  /// kernel zeroing its 37 MB of new pages took a quarter of `compute(img)` (profile, issue 14).
+  /// The same descriptors as `compute(img)`, bit for bit. Throws as `compute(img)` does, with
+  /// `field` then unspecified.
+  void compute(const image_view<T>& img, descriptor_field<T>& field, workspace& scratch) const {
+    check_image(img, "compute");
+    const Eigen::Index h = img.rows();
+    const Eigen::Index w = img.cols();
+    // (The span path's zero-margin bookkeeping does not hold for a whole-image pass.)
+    scratch.zeroed_rows = scratch.zeroed_cols = scratch.zeroed_margin = -1;
+    Eigen::Array<T, Eigen::Dynamic, 1>& channels = scratch.channels;
+    orientation_channels(img, channels, scratch.gx, scratch.gy);
+
+    // Bin b of the patch at top-left t samples the pooled channels at t + b * bin, for every
+    // row and column in [0, size - bin]. A patch row needs pooled rows r .. r + (NumBins-1)*bin:
+    // a ring of that many rows (about 44 KB for sift_lite on 120 px) instead of all of them.
+    const Eigen::Index nx = w - bin_ + 1;
+    // Float with the default kernels: exact running box sums (detail::dsift::box_pooler);
+    // otherwise one weighted sum per tap.
+    if constexpr (std::is_same_v<T, float>) {
+      if (detail::dsift::box_pooler<NumAngles>::applies(pooling_, bin_, margin())) {
+        detail::dsift::box_pooler<NumAngles> pool(pooling_, channels.data(), h, w, margin(), bin_,
+                                                  nx);
+        compute_rows(pool, h, w, nx, field);
+        return;
+      }
+    }
+    detail::dsift::row_pooler<NumAngles, T> pool(pooling_, channels.data(), w, margin(), 0, nx);
+    compute_rows(pool, h, w, nx, field);
+  }
 
   /// `describe_at` reusing `scratch`'s memory.
   [[nodiscard]] Eigen::Array<T, Eigen::Dynamic, Eigen::Dynamic> describe_at(
@@ -628,6 +641,11 @@ class dense_sift {
                             Eigen::Array<T, Eigen::Dynamic, 1>& channels) const {
     Eigen::Array<T, Eigen::Dynamic, 1> gx;
     Eigen::Array<T, Eigen::Dynamic, 1> gy;
+    orientation_channels(img, channels, gx, gy);
+  }
+  void orientation_channels(const image_view<T>& img, Eigen::Array<T, Eigen::Dynamic, 1>& channels,
+                            Eigen::Array<T, Eigen::Dynamic, 1>& gx,
+                            Eigen::Array<T, Eigen::Dynamic, 1>& gy) const {
     const Eigen::Index stride = detail::dsift::gradients(img, peak(img), gradient_, gx, gy);
     detail::dsift::orientation_channels<NumAngles>(gx, gy, img.rows(), img.cols(), stride, margin(),
                                                    cos_a_, sin_a_, params_.alpha, channels);
