@@ -37,6 +37,7 @@
 
 #include "tacmap/grid/pose_grid.hpp"
 #include "tacmap/measurement/descriptor_likelihood.hpp"
+#include "tacmap/measurement/detail/state_ranges.hpp"
 
 namespace tacmap {
 
@@ -254,15 +255,92 @@ class rotated_descriptor_likelihood {
   void log_likelihood(const G& grid, const measurement_type& z, belief_array<G>& out)
       const requires std::same_as<typename G::scalar_type, scalar_type> {
     distances(grid, z, out);
-    const auto temper = static_cast<scalar_type>(params_.tempering);
-    if (!(temper > scalar_type(0))) {  // tempering 0: a flat likelihood
+    if (!(static_cast<scalar_type>(params_.tempering) > scalar_type(0))) {  // a flat likelihood
       out.setZero();
       return;
     }
-    if (params_.shape == likelihood_shape::inverse)
-      out = -temper * (out + static_cast<scalar_type>(params_.epsilon)).log();
-    else
-      out *= -temper / static_cast<scalar_type>(params_.tau);
+    to_log_likelihood(out);
+  }
+
+  /// Tracking hook (measurement/concept.hpp): an upper bound on log p(z | x, theta) for every
+  /// pose and touch. Distances are >= 0 (so is an off-map patch's mean distance), so the
+  /// exponential shape's -tempering d / tau is <= 0 and eq. (2)'s -tempering log(d + epsilon)
+  /// is <= -tempering log(epsilon) — returned a hair higher, so that the float logarithm (and
+  /// epsilon rounded to float) of the model itself cannot exceed it. As descriptor_likelihood.
+  [[nodiscard]] double log_likelihood_bound() const {
+    if (params_.shape == likelihood_shape::exponential) return 0.0;
+    const double b = -params_.tempering * std::log(params_.epsilon);
+    return b + 1e-5 * (1.0 + std::abs(b));
+  }
+
+  /// Tracking hook: log p(z | x, theta) at (at least) the poses of `states` (sorted, disjoint
+  /// ranges of pose indices a * rows * cols + row * cols + col), bit for bit what
+  /// `log_likelihood` writes there; other entries unspecified.
+  ///
+  /// Only the headings the ranges touch are rendered and described, and the distance kernel
+  /// runs only on the field tiles their patches read (x + o_{a,m} for the requested x; the same
+  /// kernel, register by register, so the same values). Each pose then adds its patches'
+  /// distances in the order `distances` adds them (band of the field position, then patch) and
+  /// takes the same log or scale on whole chunks of 16 poses (the vectorised logarithm splits a
+  /// chunk as it splits the whole grid). Cost: proportional to the support — except that a
+  /// requested pose whose patch m falls off the map needs that patch's mean distance over the
+  /// whole layer (see the file comment), i.e. its distances over every field row it reaches:
+  /// one descriptor's (all pairs: one heading's) pass over the field, summed in `distances`'
+  /// exact order. A descriptor with its own distance (not euclidean) takes the whole grid.
+  template <class G>
+  void log_likelihood_on(const G& grid, const measurement_type& z, belief_array<G>& out,
+                         std::span<const state_range> states)
+      const requires std::same_as<typename G::scalar_type, scalar_type> {
+    if constexpr (!euclidean_descriptor<Descriptor>) {
+      log_likelihood(grid, z, out);
+    } else {
+      check_grid(grid);
+      check_measurement(z);
+      const Eigen::Index n = grid.size();
+      detail::covering_tiles(states, chunk_states, n, chunks_);
+      if (!(static_cast<scalar_type>(params_.tempering) > scalar_type(0))) {
+        for (const detail::tile_range& t : chunks_) {
+          const state_range p = detail::tile_positions(t, chunk_states, n);
+          out.segment(p.begin, p.end - p.begin).setZero();
+        }
+        return;
+      }
+      split_into_rows(n);
+      // Only the headings asked for: rendered, described, their norms taken in `distances`'
+      // column layout (the same columns, so the same reductions).
+      const bool summed = params_.pairs == pairing::all_pairs;
+      std::vector<char> wanted(static_cast<std::size_t>(angles_), 0);
+      for (const row_segment& s : segments_) wanted[static_cast<std::size_t>(s.layer)] = 1;
+      describe_tactile(z, tactile_, !summed, &wanted);
+      const auto& described = tactile_;  // const: the same reductions as squared_norms(g)
+      const Eigen::Index dim = described.rows();
+      const auto column = [&](Eigen::Index a, Eigen::Index m) {
+        return summed ? a * m_count_ + m : m * angles_ + a;
+      };
+      std::size_t s0 = 0;
+      while (s0 < segments_.size()) {
+        const Eigen::Index a = segments_[s0].layer;
+        std::size_t s1 = s0;
+        while (s1 < segments_.size() && segments_[s1].layer == a) ++s1;
+        const std::span<const row_segment> rows(segments_.data() + s0, s1 - s0);
+        // The descriptors of heading a: all pairs one group (its M columns summed by the
+        // kernel into S = sum_n D_n), aligned M single descriptors.
+        Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g(dim, m_count_);
+        std::vector<scalar_type> norms(static_cast<std::size_t>(m_count_));
+        for (Eigen::Index m = 0; m < m_count_; ++m) {
+          const Eigen::Index j = column(a, m);
+          g.col(m) = described.col(j);
+          norms[static_cast<std::size_t>(m)] = described.col(j).square().sum();
+        }
+        heading_on(a, rows, g, norms, out);
+        s0 = s1;
+      }
+      for (const detail::tile_range& t : chunks_) {
+        const state_range p = detail::tile_positions(t, chunk_states, n);
+        auto segment = out.segment(p.begin, p.end - p.begin);
+        to_log_likelihood(segment);
+      }
+    }
   }
 
  private:
@@ -287,9 +365,11 @@ class rotated_descriptor_likelihood {
   // Every tactile descriptor into g (dimension x M A): column a M + m is patch m at heading a,
   // or with `by_patch` column m A + a (the aligned kernel's order). g is resized, so a reused
   // workspace costs no allocation.
+  // `only` (optional, one flag per heading): describe those headings only, the other columns
+  // are left as they were (the tracking hook's headings).
   void describe_tactile(const measurement_type& z,
-                        Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>& g,
-                        bool by_patch) const {
+                        Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>& g, bool by_patch,
+                        const std::vector<char>* only = nullptr) const {
     check_measurement(z);
     image<scalar_type>& zt = extended_;  // reused, like the canvas
     extend(z, zt);
@@ -300,6 +380,7 @@ class rotated_descriptor_likelihood {
     image<scalar_type>& canvas = canvas_;  // reused: one touch renders 36 canvases
     canvas.resize(canvas_rows_, canvas_cols_);
     for (Eigen::Index a = 0; a < angles_; ++a) {
+      if (only != nullptr && (*only)[static_cast<std::size_t>(a)] == 0) continue;
       const heading_tables& h = heading_[static_cast<std::size_t>(a)];
       render(zt, h, canvas);
       const std::span<const grid_cell> cells(h.canvas_top_left.data(), h.canvas_top_left.size());
@@ -482,6 +563,183 @@ class rotated_descriptor_likelihood {
     }
   }
 
+  // Eq. (2) or the exponential, tempered (tempering > 0), in place: one expression for the
+  // whole grid and for the tracking hook's chunks, so that both evaluate it alike.
+  template <class X>
+  void to_log_likelihood(X& x) const {
+    const auto temper = static_cast<scalar_type>(params_.tempering);
+    if (params_.shape == likelihood_shape::inverse)
+      x = -temper * (x + static_cast<scalar_type>(params_.epsilon)).log();
+    else
+      x *= -temper / static_cast<scalar_type>(params_.tau);
+  }
+
+  // The tracking hook's unit of poses: 16 floats (64 bytes) hold whole SIMD packets of every
+  // x86 level up to AVX-512, so Eigen's vectorised logarithm takes the same packets (and the
+  // same scalar tail at the grid's end) on a chunk as on the whole grid.
+  static constexpr Eigen::Index chunk_states = 16;
+
+  // Poses [col_begin, col_end) of row `row` in layer `layer` (tracking hook).
+  struct row_segment {
+    Eigen::Index layer = 0, row = 0, col_begin = 0, col_end = 0;
+  };
+
+  // chunks_ (ranges of chunk_states poses) as row segments, layer by layer, into segments_.
+  void split_into_rows(Eigen::Index n) const {
+    const Eigen::Index plane = rows_ * cols_;
+    segments_.clear();
+    for (const detail::tile_range& t : chunks_) {
+      const state_range p = detail::tile_positions(t, chunk_states, n);
+      for (Eigen::Index i = p.begin; i < p.end;) {
+        const Eigen::Index a = i / plane;
+        const Eigen::Index within = i - a * plane;
+        const Eigen::Index row = within / cols_;
+        const Eigen::Index col = within - row * cols_;
+        const Eigen::Index end = std::min(cols_, col + (p.end - i));
+        segments_.push_back({a, row, col, end});
+        i += end - col;
+      }
+    }
+  }
+
+  // Heading a's poses `rows` (row segments of layer a) into `out`, as distances() and
+  // add_band() would write them: g, norms: the heading's M tactile descriptors (patch order).
+  template <class Out>
+  void heading_on(Eigen::Index a, std::span<const row_segment> rows,
+                  const Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>& g,
+                  const std::vector<scalar_type>& norms, Out& out) const {
+    constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
+    const bool summed = params_.pairs == pairing::all_pairs;
+    const Eigen::Index fc = field_cols_;
+    const Eigen::Index positions = field_rows_ * field_cols_;
+    const Eigen::Index tiles = (positions + width - 1) / width;
+    const heading_tables& h = heading_[static_cast<std::size_t>(a)];
+    const auto m_size = static_cast<std::size_t>(m_count_);
+    // Distance columns: all pairs one (S, the group's sum), aligned one per patch.
+    const Eigen::Index columns = summed ? 1 : m_count_;
+    field_buffer_.resize(tiles * width, columns);
+    // Which patches fall off the map for some requested pose (their layer mean is needed),
+    // and the field tiles each column needs.
+    std::vector<char> off(m_size, 0);
+    std::vector<std::vector<detail::tile_range>> need(static_cast<std::size_t>(columns));
+    const auto add_tiles = [&](Eigen::Index k, Eigen::Index begin, Eigen::Index end) {
+      if (end > begin)
+        need[static_cast<std::size_t>(k)].push_back({begin / width, (end + width - 1) / width});
+    };
+    for (Eigen::Index m = 0; m < m_count_; ++m) {
+      const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
+      const grid_cell o = h.field_offset[static_cast<std::size_t>(m)];
+      const Eigen::Index k = summed ? 0 : m;
+      for (const row_segment& s : rows) {
+        const bool row_in = s.row >= r.first_row && s.row < r.first_row + r.rows;
+        const Eigen::Index c0 = row_in ? std::max(s.col_begin, r.first_col) : 0;
+        const Eigen::Index c1 = row_in ? std::min(s.col_end, r.first_col + r.cols) : 0;
+        if (c1 - c0 < s.col_end - s.col_begin) off[static_cast<std::size_t>(m)] = 1;
+        if (c1 > c0) {
+          const Eigen::Index p = (s.row + o.row) * fc + o.col;
+          add_tiles(k, p + c0, p + c1);
+        }
+      }
+      if (off[static_cast<std::size_t>(m)] != 0 && r.rows > 0 && r.cols > 0)
+        add_tiles(k, (r.first_row + o.row) * fc, (r.first_row + r.rows + o.row) * fc);
+    }
+    // The distances on those tiles (merged), the same kernel as distances().
+    for (Eigen::Index k = 0; k < columns; ++k) {
+      auto& ranges = need[static_cast<std::size_t>(k)];
+      std::sort(ranges.begin(), ranges.end(),
+                [](const detail::tile_range& x, const detail::tile_range& y) {
+                  return x.begin < y.begin;
+                });
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < ranges.size(); ++i) {
+        if (kept > 0 && ranges[i].begin <= ranges[kept - 1].end)
+          ranges[kept - 1].end = std::max(ranges[kept - 1].end, ranges[i].end);
+        else
+          ranges[kept++] = ranges[i];
+      }
+      ranges.resize(kept);
+      scalar_type* column = field_buffer_.data() + k * field_buffer_.rows();
+      for (const detail::tile_range& t : ranges) {
+        if (summed)
+          detail::distances_each(field_tiles_, g, norms.data(), column + t.begin * width,
+                                 field_buffer_.rows(), nullptr, t, m_count_);
+        else {
+          const Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> gm = g.col(k);
+          detail::distances_each(field_tiles_, gm, norms.data() + k, column + t.begin * width,
+                                 field_buffer_.rows(), nullptr, t, 1);
+        }
+      }
+    }
+    // Off-map patches: their mean over the layer, summed exactly as add_band sums it (per band
+    // of the field: whole registers into one accumulator, the rest apart; the bands in double).
+    std::vector<scalar_type> mean(m_size, scalar_type(0));
+    constexpr Eigen::Index band = band_tiles * width;
+    row_scratch_.resize(static_cast<std::size_t>(std::max<Eigen::Index>(cols_, 1)));
+    for (Eigen::Index m = 0; m < m_count_; ++m) {
+      const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
+      if (off[static_cast<std::size_t>(m)] == 0 || r.rows <= 0 || r.cols <= 0) continue;
+      const grid_cell o = h.field_offset[static_cast<std::size_t>(m)];
+      const scalar_type* d = field_buffer_.data() + (summed ? 0 : m) * field_buffer_.rows();
+      const Eigen::Index reach_lo = r.first_row + o.row;
+      const Eigen::Index reach_hi = r.first_row + r.rows + o.row;
+      const Eigen::Index col_lo = r.first_col + o.col;
+      const Eigen::Index col_hi = col_lo + r.cols;
+      double total = 0.0;
+      for (Eigen::Index first = (reach_lo * fc / band) * band; first < reach_hi * fc;
+           first += band) {
+        const Eigen::Index last = std::min(first + band, positions);
+        const Eigen::Index row_lo = std::max(first / fc, reach_lo);
+        const Eigen::Index row_hi = std::min((last - 1) / fc + 1, reach_hi);
+        xsimd::batch<scalar_type> acc(scalar_type(0));
+        scalar_type tails = 0;
+        for (Eigen::Index fr = row_lo; fr < row_hi; ++fr) {
+          const Eigen::Index c0 = std::max(col_lo, first - fr * fc);
+          const Eigen::Index c1 = std::min(col_hi, last - fr * fc);
+          if (c1 <= c0) continue;
+          tails += detail::add_row(d + fr * fc + c0, row_scratch_.data(), c1 - c0, acc);
+        }
+        total += static_cast<double>(xsimd::hadd(acc)) + static_cast<double>(tails);
+      }
+      mean[static_cast<std::size_t>(m)] =
+          static_cast<scalar_type>(total / static_cast<double>(r.rows * r.cols));
+    }
+    // Each pose: 0, plus its patches' distances in the order add_band adds them (the band of
+    // the field position first, then the patch), then the off-map means in patch order.
+    struct term {
+      Eigen::Index band;
+      scalar_type value;
+    };
+    std::vector<term> terms;
+    terms.reserve(m_size);
+    scalar_type* layer = out.data() + a * rows_ * cols_;
+    for (const row_segment& s : rows)
+      for (Eigen::Index c = s.col_begin; c < s.col_end; ++c) {
+        terms.clear();
+        for (Eigen::Index m = 0; m < m_count_; ++m) {
+          const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
+          if (s.row < r.first_row || s.row >= r.first_row + r.rows || c < r.first_col ||
+              c >= r.first_col + r.cols)
+            continue;
+          const grid_cell o = h.field_offset[static_cast<std::size_t>(m)];
+          const Eigen::Index p = (s.row + o.row) * fc + c + o.col;
+          const scalar_type* d = field_buffer_.data() + (summed ? 0 : m) * field_buffer_.rows();
+          terms.push_back({p / band, d[p]});
+        }
+        std::stable_sort(terms.begin(), terms.end(),
+                         [](const term& x, const term& y) { return x.band < y.band; });
+        scalar_type v = 0;
+        for (const term& t : terms) v += t.value;
+        for (Eigen::Index m = 0; m < m_count_; ++m) {
+          const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
+          if (r.rows <= 0 || r.cols <= 0) continue;  // never on the map: nothing added
+          if (s.row < r.first_row || s.row >= r.first_row + r.rows || c < r.first_col ||
+              c >= r.first_col + r.cols)
+            v += mean[static_cast<std::size_t>(m)];
+        }
+        layer[s.row * cols_ + c] = v;
+      }
+  }
+
   // The tactile image with its last column and row repeated once more ((H + 1) x (W + 1)):
   // a bilinear sample whose coordinates are clamped to the image then always has its right and
   // lower neighbours, weighted 0 on the last column or row, with no test per pixel.
@@ -548,6 +806,13 @@ class rotated_descriptor_likelihood {
   mutable image<scalar_type> canvas_;    // the tactile image turned to one heading
   mutable image<scalar_type> extended_;  // the tactile image, edge-extended (extend())
   mutable std::vector<double> sums_;     // per tactile descriptor: its distances' sum
+  // Tracking hook (log_likelihood_on): the chunks of poses asked for, as row segments, and one
+  // heading's distances at the field positions they read (field positions x 1 or M; only the
+  // tiles computed are meaningful).
+  mutable std::vector<detail::tile_range> chunks_;
+  mutable std::vector<row_segment> segments_;
+  mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> field_buffer_;
+  mutable std::vector<scalar_type> row_scratch_;  // add_row's destination, discarded
 };
 
 }  // namespace tacmap

@@ -1,0 +1,242 @@
+// Tracking mode over (x, y, theta) (issue 14, item 3): rotated_descriptor_likelihood's hook
+// against its full log-likelihood, and a pose filter's tracked update against its full update.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "pose_test_support.hpp"
+#include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/grid/pose_grid.hpp"
+#include "tacmap/measurement/rotated_descriptor_likelihood.hpp"
+#include "tacmap/motion/pose_odometry_gaussian.hpp"
+#include "tacmap/testing/conformance.hpp"
+
+using tacmap::state_range;
+using tacmap::update_path;
+using pose_grid_t = tacmap::pose_grid<float>;
+
+static_assert(tacmap::measures_on_states<tacmap::rotated_descriptor_likelihood<tacmap::sift_lite>,
+                                         pose_grid_t>);
+static_assert(tacmap::measures_on_states<
+              tacmap::rotated_descriptor_likelihood<tacmap::classic_sift>, pose_grid_t>);
+
+namespace {
+
+// The paper's window and scale on a 64 x 64 px textured map (as test_rotated_descriptor_
+// likelihood.cpp): 47 x 23 positions per heading; near the left and right edges, patches turned
+// by about 90 degrees fall off the map (the off-map mean of the file comment).
+const tacmap::image<float>& map64() {
+  static const tacmap::image<float> map = pose_test::textured_map(64, 64, 5);
+  return map;
+}
+pose_grid_t grid64(int angles) {
+  return pose_grid_t(tacmap::planar_grid<float>({.width = 64, .height = 64}, 3.4 / 3.0,
+                                                {.width = 18, .height = 42}),
+                     angles);
+}
+
+// Random sorted disjoint ranges of [0, n), plus the awkward ones: the first and last state,
+// single states, ranges across heading boundaries (layer a's last row into layer a + 1).
+std::vector<state_range> random_ranges(Eigen::Index n, Eigen::Index plane, std::uint32_t seed) {
+  std::uint32_t state = seed * 2654435761U + 99U;
+  const auto next = [&state](Eigen::Index bound) {
+    state ^= state << 13U;
+    state ^= state >> 17U;
+    state ^= state << 5U;
+    return static_cast<Eigen::Index>(state % static_cast<std::uint32_t>(bound));
+  };
+  std::vector<state_range> raw = {{0, 1}, {n - 1, n}};
+  for (Eigen::Index a = 1 + next(2); a * plane < n; a += 2 + next(5))
+    raw.push_back({a * plane - 1 - next(30), a * plane + 1 + next(30)});
+  for (int k = 0; k < 12; ++k) {
+    const Eigen::Index b = next(n);
+    raw.push_back({b, std::min(n, b + (k % 3 == 0 ? 1 : 1 + next(70)))});
+  }
+  std::sort(raw.begin(), raw.end(),
+            [](const state_range& x, const state_range& y) { return x.begin < y.begin; });
+  // Disjoint, and not touching (the filter's ranges are maximal runs).
+  std::vector<state_range> out;
+  for (const state_range& r : raw) {
+    if (!out.empty() && r.begin <= out.back().end) {
+      out.back().end = std::max(out.back().end, r.end);
+      continue;
+    }
+    out.push_back(r);
+  }
+  return out;
+}
+
+// True when state i (of `grid`) has a patch that falls off the map for `model`.
+template <class Model>
+bool has_off_map_patch(const Model& model, const pose_grid_t& grid, Eigen::Index i) {
+  const Eigen::Index plane = grid.rows() * grid.cols();
+  const Eigen::Index a = i / plane;
+  const Eigen::Index row = (i % plane) / grid.cols();
+  const Eigen::Index col = i % grid.cols();
+  const Eigen::Index p = model.descriptor().patch_size();
+  for (Eigen::Index m = 0; m < model.patches_per_window(); ++m) {
+    const tacmap::grid_cell o = model.patch_offset(a, m);
+    if (row + o.row < 0 || col + o.col < 0 || row + o.row + p > map64().rows() ||
+        col + o.col + p > map64().cols())
+      return true;
+  }
+  return false;
+}
+
+template <class Model>
+void check_ranges_bit_for_bit(const Model& model, const pose_grid_t& grid,
+                              const tacmap::image<float>& z, std::uint32_t seed) {
+  const Eigen::Index n = grid.size();
+  Eigen::ArrayXf full(n);
+  model.log_likelihood(grid, z, full);
+  const auto states = random_ranges(n, grid.rows() * grid.cols(), seed);
+  Eigen::ArrayXf part = Eigen::ArrayXf::Constant(n, std::numeric_limits<float>::quiet_NaN());
+  model.log_likelihood_on(grid, z, part, states);
+  Eigen::Index compared = 0, off_map = 0, crossing = 0;
+  for (const state_range& r : states) {
+    if (r.begin / (grid.rows() * grid.cols()) != (r.end - 1) / (grid.rows() * grid.cols()))
+      ++crossing;
+    for (Eigen::Index i = r.begin; i < r.end; ++i) {
+      if (!(part(i) == full(i))) {
+        FAIL_CHECK("state " << i << " (layer " << i / (grid.rows() * grid.cols())
+                            << "): log_likelihood_on wrote " << part(i) << ", log_likelihood wrote "
+                            << full(i));
+        return;
+      }
+      ++compared;
+      if (has_off_map_patch(model, grid, i)) ++off_map;
+    }
+  }
+  CHECK(compared > 40);
+  CHECK(crossing >= 3);  // the test exercises ranges across heading boundaries
+  CHECK(off_map > 0);    // ... and poses whose turned patch leaves the map
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("the rotated model's tracking hook writes its full log-likelihood, bit for bit",
+                   D, tacmap::sift_lite, tacmap::classic_sift) {
+  const pose_grid_t grid = grid64(36);
+  const tacmap::image<float> z = pose_test::render(map64(), 30.0, 27.0, 1.1, grid.window_size());
+  struct named {
+    const char* name;
+    tacmap::rotated_likelihood_params p;
+  };
+  const std::vector<named> configs = {
+      {"aligned, exponential (default)", {}},
+      {"all pairs, exponential", {.pairs = tacmap::pairing::all_pairs}},
+      {"aligned, inverse", {.shape = tacmap::likelihood_shape::inverse}},
+      {"paper: all pairs, inverse",
+       {.pairs = tacmap::pairing::all_pairs, .shape = tacmap::likelihood_shape::inverse}},
+      {"tempering 0.5, tau 0.3", {.tau = 0.3, .tempering = 0.5}},
+      {"tempering 0 (flat)", {.tempering = 0.0}},
+      {"spacing 4 (more patches)", {.spacing = 4}},
+  };
+  std::uint32_t seed = 1;
+  for (const auto& c : configs) {
+    CAPTURE(c.name);
+    const tacmap::rotated_descriptor_likelihood<D> model(D{}, map64(), grid, c.p);
+    check_ranges_bit_for_bit(model, grid, z, seed++);
+    tacmap::testing::check_log_likelihood_on(model, grid, z);
+  }
+}
+
+TEST_CASE("the rotated model's hook on 12 headings, a touch that fits one pose exactly") {
+  const pose_grid_t g12 = grid64(12);
+  const tacmap::rotated_descriptor_likelihood<tacmap::classic_sift> model(tacmap::classic_sift{},
+                                                                          map64(), g12);
+  const Eigen::Index best = g12.index(3, {11, 20});
+  const tacmap::image<float> z = pose_test::render_state(map64(), g12, best);
+  check_ranges_bit_for_bit(model, g12, z, 7);
+  check_ranges_bit_for_bit(model, g12, z, 8);
+  Eigen::ArrayXf part = Eigen::ArrayXf::Constant(g12.size(), NAN);
+  Eigen::ArrayXf full(g12.size());
+  model.log_likelihood(g12, z, full);
+  const std::vector<state_range> one = {{best, best + 1}};
+  model.log_likelihood_on(g12, z, part, one);
+  CHECK(part(best) == full(best));
+  CHECK(part(best) == full.maxCoeff());
+}
+
+TEST_CASE("the rotated model's bound holds, also where the touch matches exactly") {
+  const pose_grid_t grid = grid64(12);
+  const Eigen::Index best = grid.index(2, {10, 22});
+  const tacmap::image<float> z = pose_test::render_state(map64(), grid, best);
+  for (const auto shape :
+       {tacmap::likelihood_shape::exponential, tacmap::likelihood_shape::inverse})
+    for (const double epsilon : {1e-3, 1e-6}) {
+      const tacmap::rotated_descriptor_likelihood<tacmap::sift_lite> model(
+          tacmap::sift_lite{}, map64(), grid, {.shape = shape, .epsilon = epsilon});
+      Eigen::ArrayXf full(grid.size());
+      model.log_likelihood(grid, z, full);
+      const double bound = model.log_likelihood_bound();
+      CAPTURE(epsilon);
+      CHECK(static_cast<double>(full.maxCoeff()) <= bound);
+      if (shape == tacmap::likelihood_shape::exponential) {
+        CHECK(bound == 0.0);
+      } else {
+        // -log(epsilon), a hair higher: tight enough to be useful.
+        CHECK(bound == doctest::Approx(-std::log(epsilon)).epsilon(1e-4));
+      }
+    }
+}
+
+TEST_CASE("a tracked pose filter equals its full update within the bound, same MAP state") {
+  // 36 headings, classic SIFT; localized with full updates from a prior around the sensor
+  // (what a few touches give), then every step compared: tracked against full from the same
+  // predicted belief.
+  const pose_grid_t grid = grid64(36);
+  const double mm = grid.mm_per_px();
+  using model_t = tacmap::rotated_descriptor_likelihood<tacmap::classic_sift>;
+  tacmap::bayes_filter full(grid, tacmap::pose_odometry_gaussian({.sigma_mm = 0.4}),
+                            model_t(tacmap::classic_sift{}, map64(), grid));
+  double theta = 1.0;  // rad; the sensor's true heading
+  double cx = 31.0;    // sensor centre, map px
+  double cy = 30.0;
+  const auto touch = [&] { return pose_test::render(map64(), cx, cy, theta, grid.window_size()); };
+  full.update(touch());
+  full.update(touch());
+  int tracked_steps = 0;
+  for (int step = 0; step < 6; ++step) {
+    CAPTURE(step);
+    const double du = step % 2 == 0 ? 2.0 : -1.0;
+    const double dv = step % 3 == 0 ? 1.0 : -2.0;
+    const double dtheta = step == 3 ? grid.angle_step_rad() : 0.0;
+    cx += std::cos(theta) * du - std::sin(theta) * dv;
+    cy += std::sin(theta) * du + std::cos(theta) * dv;
+    theta += dtheta;
+    const tacmap::sensor_odometry u{.du_mm = du * mm, .dv_mm = dv * mm, .dtheta_rad = dtheta};
+    auto tracked = full;
+    tracked.set_tracking({.epsilon = 1e-6});
+    tracked.predict(u);
+    full.predict(u);
+    const auto z = touch();
+    const tacmap::update_report rt = tracked.update(z);
+    const tacmap::update_report rf = full.update(z);
+    CHECK(rf.path == update_path::full);
+    if (rt.path != update_path::tracked) {
+      CHECK((tracked.belief() == full.belief()).all());
+      continue;
+    }
+    ++tracked_steps;
+    CHECK(rt.evaluated_states < grid.size() / 4);
+    CHECK(rt.tracking_error_bound <= tracked.tracking().tolerance);
+    const double tv =
+        0.5 * (tracked.belief().cast<double>() - full.belief().cast<double>()).abs().sum();
+    // The bound, plus float rounding of two normalisations.
+    CHECK(tv <= rt.tracking_error_bound + 1e-5);
+    CHECK(tracked.estimate().map_index == full.estimate().map_index);
+    CHECK(static_cast<double>(tracked.belief().sum()) == doctest::Approx(1.0).epsilon(1e-5));
+  }
+  CHECK(tracked_steps >= 4);
+  // Still where the sensor is.
+  const auto e = full.estimate();
+  CHECK(std::abs(e.map_mm(0) / mm - cx) <= 2.0);
+  CHECK(std::abs(e.map_mm(1) / mm - cy) <= 2.0);
+}
