@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iomanip>
 #include <limits>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "pose_test_support.hpp"
@@ -104,9 +106,10 @@ void check_ranges_bit_for_bit(const Model& model, const pose_grid_t& grid,
       ++crossing;
     for (Eigen::Index i = r.begin; i < r.end; ++i) {
       if (!(part(i) == full(i))) {
-        FAIL_CHECK("state " << i << " (layer " << i / (grid.rows() * grid.cols())
-                            << "): log_likelihood_on wrote " << part(i) << ", log_likelihood wrote "
-                            << full(i));
+        FAIL_CHECK(std::setprecision(9)
+                   << "state " << i << " (layer " << i / (grid.rows() * grid.cols())
+                   << "): log_likelihood_on wrote " << part(i) << ", log_likelihood wrote "
+                   << full(i));
         return;
       }
       ++compared;
@@ -140,7 +143,8 @@ TEST_CASE_TEMPLATE("the rotated model's tracking hook writes its full log-likeli
   };
   std::uint32_t seed = 1;
   for (const auto& c : configs) {
-    CAPTURE(c.name);
+    const std::string name = c.name;
+    CAPTURE(name);
     const tacmap::rotated_descriptor_likelihood<D> model(D{}, map64(), grid, c.p);
     check_ranges_bit_for_bit(model, grid, z, seed++);
     tacmap::testing::check_log_likelihood_on(model, grid, z);

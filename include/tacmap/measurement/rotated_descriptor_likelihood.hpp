@@ -317,24 +317,30 @@ class rotated_descriptor_likelihood {
       const auto column = [&](Eigen::Index a, Eigen::Index m) {
         return summed ? a * m_count_ + m : m * angles_ + a;
       };
-      std::size_t s0 = 0;
-      while (s0 < segments_.size()) {
-        const Eigen::Index a = segments_[s0].layer;
-        std::size_t s1 = s0;
-        while (s1 < segments_.size() && segments_[s1].layer == a) ++s1;
-        const std::span<const row_segment> rows(segments_.data() + s0, s1 - s0);
+      // The wanted descriptors' squared norms, in `distances`' column layout.
+      norms_.assign(static_cast<std::size_t>(described.cols()), scalar_type(0));
+      for (Eigen::Index a = 0; a < angles_; ++a)
+        if (wanted[static_cast<std::size_t>(a)] != 0)
+          for (Eigen::Index m = 0; m < m_count_; ++m)
+            norms_[static_cast<std::size_t>(column(a, m))] =
+                described.col(column(a, m)).square().sum();
+      // Which patches of which headings fall off the map for a requested pose: their layer
+      // means, all in one pass over the field (off_map_means).
+      off_.assign(static_cast<std::size_t>(angles_ * m_count_), 0);
+      for_each_heading(
+          [&](Eigen::Index a, std::span<const row_segment> rows) { mark_off_map(a, rows); });
+      off_map_means(column);
+      for_each_heading([&](Eigen::Index a, std::span<const row_segment> rows) {
         // The descriptors of heading a: all pairs one group (its M columns summed by the
         // kernel into S = sum_n D_n), aligned M single descriptors.
         Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g(dim, m_count_);
         std::vector<scalar_type> norms(static_cast<std::size_t>(m_count_));
         for (Eigen::Index m = 0; m < m_count_; ++m) {
-          const Eigen::Index j = column(a, m);
-          g.col(m) = described.col(j);
-          norms[static_cast<std::size_t>(m)] = described.col(j).square().sum();
+          g.col(m) = described.col(column(a, m));
+          norms[static_cast<std::size_t>(m)] = norms_[static_cast<std::size_t>(column(a, m))];
         }
         heading_on(a, rows, g, norms, out);
-        s0 = s1;
-      }
+      });
       for (const detail::tile_range& t : chunks_) {
         const state_range p = detail::tile_positions(t, chunk_states, n);
         auto segment = out.segment(p.begin, p.end - p.begin);
@@ -602,8 +608,154 @@ class rotated_descriptor_likelihood {
     }
   }
 
+  // f(a, rows) for each heading a with requested poses, `rows` its row segments.
+  template <class F>
+  void for_each_heading(F&& f) const {
+    std::size_t s0 = 0;
+    while (s0 < segments_.size()) {
+      const Eigen::Index a = segments_[s0].layer;
+      std::size_t s1 = s0;
+      while (s1 < segments_.size() && segments_[s1].layer == a) ++s1;
+      f(a, std::span<const row_segment>(segments_.data() + s0, s1 - s0));
+      s0 = s1;
+    }
+  }
+
+  // True when pose (row, col) of heading h's layer has patch m on the map.
+  static bool lands(const heading_tables& h, Eigen::Index m, Eigen::Index row, Eigen::Index col) {
+    const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
+    return row >= r.first_row && row < r.first_row + r.rows && col >= r.first_col &&
+           col < r.first_col + r.cols;
+  }
+
+  // off_[a M + m] = 1 when a pose of `rows` (heading a) has patch m off the map, and the patch
+  // lands somewhere (a patch that never does adds nothing, see `distances`).
+  void mark_off_map(Eigen::Index a, std::span<const row_segment> rows) const {
+    const heading_tables& h = heading_[static_cast<std::size_t>(a)];
+    for (Eigen::Index m = 0; m < m_count_; ++m) {
+      const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
+      if (r.rows <= 0 || r.cols <= 0) continue;
+      for (const row_segment& s : rows) {
+        const bool row_in = s.row >= r.first_row && s.row < r.first_row + r.rows;
+        if (!row_in || s.col_begin < r.first_col || s.col_end > r.first_col + r.cols) {
+          off_[static_cast<std::size_t>(a * m_count_ + m)] = 1;
+          break;
+        }
+      }
+    }
+  }
+
+  // means_[a M + m] for every off_ patch: its distances' mean over the poses where it lands,
+  // summed exactly as `distances` sums it (add_band: per band of the field, whole registers
+  // into one accumulator and the rest apart, the bands in double). Those patches' descriptors
+  // (all pairs: their headings' groups) meet the field in one banded pass, as in `distances`,
+  // so the field is read once however many patches fall off (one pass per patch measured
+  // 94 ms for a tracked touch on 640 x 480, 36 headings, six such patches).
+  template <class Column>
+  void off_map_means(const Column& column) const {
+    const bool summed = params_.pairs == pairing::all_pairs;
+    means_.assign(off_.size(), scalar_type(0));
+    // The descriptors to compute, and per output column the patches it serves.
+    struct item {
+      Eigen::Index a, m, out;  // heading, patch, output column
+    };
+    std::vector<item> items;
+    std::vector<Eigen::Index> columns;           // tactile_ columns, kernel order
+    std::vector<detail::position_range> ranges;  // per descriptor: the reach rows it serves
+    const Eigen::Index group = summed ? m_count_ : 1;
+    const Eigen::Index fc = field_cols_;
+    const auto reach_rows = [&](Eigen::Index a, Eigen::Index m) {
+      const heading_tables& h = heading_[static_cast<std::size_t>(a)];
+      const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
+      const Eigen::Index lo = r.first_row + h.field_offset[static_cast<std::size_t>(m)].row;
+      return detail::position_range{lo * fc, (lo + r.rows) * fc};
+    };
+    for (Eigen::Index a = 0; a < angles_; ++a) {
+      if (summed) {
+        detail::position_range u{0, 0};
+        for (Eigen::Index m = 0; m < m_count_; ++m) {
+          if (off_[static_cast<std::size_t>(a * m_count_ + m)] == 0) continue;
+          const detail::position_range r = reach_rows(a, m);
+          u = u.end <= u.begin
+                  ? r
+                  : detail::position_range{std::min(u.begin, r.begin), std::max(u.end, r.end)};
+          items.push_back({a, m, static_cast<Eigen::Index>(columns.size()) / group});
+        }
+        if (u.end <= u.begin) continue;
+        for (Eigen::Index m = 0; m < m_count_; ++m) {
+          columns.push_back(column(a, m));
+          ranges.push_back(u);
+        }
+      } else {
+        for (Eigen::Index m = 0; m < m_count_; ++m) {
+          if (off_[static_cast<std::size_t>(a * m_count_ + m)] == 0) continue;
+          items.push_back({a, m, static_cast<Eigen::Index>(columns.size())});
+          columns.push_back(column(a, m));
+          ranges.push_back(reach_rows(a, m));
+        }
+      }
+    }
+    if (items.empty()) return;
+    const auto count = static_cast<Eigen::Index>(columns.size());
+    Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g(tactile_.rows(), count);
+    std::vector<scalar_type> norms(static_cast<std::size_t>(count));
+    for (Eigen::Index j = 0; j < count; ++j) {
+      g.col(j) = tactile_.col(columns[static_cast<std::size_t>(j)]);
+      norms[static_cast<std::size_t>(j)] =
+          norms_[static_cast<std::size_t>(columns[static_cast<std::size_t>(j)])];
+    }
+    constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
+    const Eigen::Index positions = field_rows_ * field_cols_;
+    Eigen::Index lo = positions, hi = 0;
+    for (const detail::position_range& r : ranges) {
+      lo = std::min(lo, r.begin);
+      hi = std::max(hi, r.end);
+    }
+    std::vector<double> totals(items.size(), 0.0);
+    auto& band = workspace_;  // as in distances(): band position p - first x output column
+    band.resize(band_tiles * width, count / group);
+    row_scratch_.resize(static_cast<std::size_t>(std::max<Eigen::Index>(cols_, 1)));
+    const Eigen::Index tiles = (positions + width - 1) / width;
+    for (Eigen::Index t0 = lo / width / band_tiles * band_tiles; t0 * width < hi;
+         t0 += band_tiles) {
+      const Eigen::Index t1 = std::min(t0 + band_tiles, tiles);
+      const Eigen::Index first = t0 * width;
+      const Eigen::Index last = std::min(t1 * width, positions);
+      detail::distances_each(field_tiles_, g, norms.data(), band.data(), band.rows(), ranges.data(),
+                             {t0, t1}, group);
+      for (std::size_t i = 0; i < items.size(); ++i) {
+        const item& it = items[i];
+        const heading_tables& h = heading_[static_cast<std::size_t>(it.a)];
+        const patch_reach& r = h.reach[static_cast<std::size_t>(it.m)];
+        const grid_cell o = h.field_offset[static_cast<std::size_t>(it.m)];
+        const scalar_type* d = &band(0, it.out);
+        const Eigen::Index row_lo = std::max(first / fc, r.first_row + o.row);
+        const Eigen::Index row_hi = std::min((last - 1) / fc + 1, r.first_row + r.rows + o.row);
+        const Eigen::Index col_lo = r.first_col + o.col;
+        const Eigen::Index col_hi = col_lo + r.cols;
+        xsimd::batch<scalar_type> acc(scalar_type(0));
+        scalar_type tails = 0;
+        for (Eigen::Index fr = row_lo; fr < row_hi; ++fr) {
+          const Eigen::Index c0 = std::max(col_lo, first - fr * fc);
+          const Eigen::Index c1 = std::min(col_hi, last - fr * fc);
+          if (c1 <= c0) continue;
+          tails += detail::add_row(d + fr * fc + c0 - first, row_scratch_.data(), c1 - c0, acc);
+        }
+        totals[i] += static_cast<double>(xsimd::hadd(acc)) + static_cast<double>(tails);
+      }
+    }
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      const item& it = items[i];
+      const patch_reach& r =
+          heading_[static_cast<std::size_t>(it.a)].reach[static_cast<std::size_t>(it.m)];
+      means_[static_cast<std::size_t>(it.a * m_count_ + it.m)] =
+          static_cast<scalar_type>(totals[i] / static_cast<double>(r.rows * r.cols));
+    }
+  }
+
   // Heading a's poses `rows` (row segments of layer a) into `out`, as distances() and
-  // add_band() would write them: g, norms: the heading's M tactile descriptors (patch order).
+  // add_band() would write them (off-map patches: means_). g, norms: the heading's M tactile
+  // descriptors (patch order).
   template <class Out>
   void heading_on(Eigen::Index a, std::span<const row_segment> rows,
                   const Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>& g,
@@ -615,33 +767,23 @@ class rotated_descriptor_likelihood {
     const Eigen::Index tiles = (positions + width - 1) / width;
     const heading_tables& h = heading_[static_cast<std::size_t>(a)];
     const auto m_size = static_cast<std::size_t>(m_count_);
-    // Distance columns: all pairs one (S, the group's sum), aligned one per patch.
+    // Distance columns: all pairs one (S, the group's sum), aligned one per patch; the field
+    // tiles each column needs (the requested poses' patches on the map).
     const Eigen::Index columns = summed ? 1 : m_count_;
     field_buffer_.resize(tiles * width, columns);
-    // Which patches fall off the map for some requested pose (their layer mean is needed),
-    // and the field tiles each column needs.
-    std::vector<char> off(m_size, 0);
     std::vector<std::vector<detail::tile_range>> need(static_cast<std::size_t>(columns));
-    const auto add_tiles = [&](Eigen::Index k, Eigen::Index begin, Eigen::Index end) {
-      if (end > begin)
-        need[static_cast<std::size_t>(k)].push_back({begin / width, (end + width - 1) / width});
-    };
     for (Eigen::Index m = 0; m < m_count_; ++m) {
       const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
       const grid_cell o = h.field_offset[static_cast<std::size_t>(m)];
-      const Eigen::Index k = summed ? 0 : m;
+      auto& tiles_of = need[static_cast<std::size_t>(summed ? 0 : m)];
       for (const row_segment& s : rows) {
-        const bool row_in = s.row >= r.first_row && s.row < r.first_row + r.rows;
-        const Eigen::Index c0 = row_in ? std::max(s.col_begin, r.first_col) : 0;
-        const Eigen::Index c1 = row_in ? std::min(s.col_end, r.first_col + r.cols) : 0;
-        if (c1 - c0 < s.col_end - s.col_begin) off[static_cast<std::size_t>(m)] = 1;
-        if (c1 > c0) {
-          const Eigen::Index p = (s.row + o.row) * fc + o.col;
-          add_tiles(k, p + c0, p + c1);
-        }
+        if (s.row < r.first_row || s.row >= r.first_row + r.rows) continue;
+        const Eigen::Index c0 = std::max(s.col_begin, r.first_col);
+        const Eigen::Index c1 = std::min(s.col_end, r.first_col + r.cols);
+        if (c1 <= c0) continue;
+        const Eigen::Index p = (s.row + o.row) * fc + o.col;
+        tiles_of.push_back({(p + c0) / width, (p + c1 + width - 1) / width});
       }
-      if (off[static_cast<std::size_t>(m)] != 0 && r.rows > 0 && r.cols > 0)
-        add_tiles(k, (r.first_row + o.row) * fc, (r.first_row + r.rows + o.row) * fc);
     }
     // The distances on those tiles (merged), the same kernel as distances().
     for (Eigen::Index k = 0; k < columns; ++k) {
@@ -660,51 +802,19 @@ class rotated_descriptor_likelihood {
       ranges.resize(kept);
       scalar_type* column = field_buffer_.data() + k * field_buffer_.rows();
       for (const detail::tile_range& t : ranges) {
-        if (summed)
+        if (summed) {
           detail::distances_each(field_tiles_, g, norms.data(), column + t.begin * width,
                                  field_buffer_.rows(), nullptr, t, m_count_);
-        else {
+        } else {
           const Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> gm = g.col(k);
           detail::distances_each(field_tiles_, gm, norms.data() + k, column + t.begin * width,
                                  field_buffer_.rows(), nullptr, t, 1);
         }
       }
     }
-    // Off-map patches: their mean over the layer, summed exactly as add_band sums it (per band
-    // of the field: whole registers into one accumulator, the rest apart; the bands in double).
-    std::vector<scalar_type> mean(m_size, scalar_type(0));
-    constexpr Eigen::Index band = band_tiles * width;
-    row_scratch_.resize(static_cast<std::size_t>(std::max<Eigen::Index>(cols_, 1)));
-    for (Eigen::Index m = 0; m < m_count_; ++m) {
-      const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
-      if (off[static_cast<std::size_t>(m)] == 0 || r.rows <= 0 || r.cols <= 0) continue;
-      const grid_cell o = h.field_offset[static_cast<std::size_t>(m)];
-      const scalar_type* d = field_buffer_.data() + (summed ? 0 : m) * field_buffer_.rows();
-      const Eigen::Index reach_lo = r.first_row + o.row;
-      const Eigen::Index reach_hi = r.first_row + r.rows + o.row;
-      const Eigen::Index col_lo = r.first_col + o.col;
-      const Eigen::Index col_hi = col_lo + r.cols;
-      double total = 0.0;
-      for (Eigen::Index first = (reach_lo * fc / band) * band; first < reach_hi * fc;
-           first += band) {
-        const Eigen::Index last = std::min(first + band, positions);
-        const Eigen::Index row_lo = std::max(first / fc, reach_lo);
-        const Eigen::Index row_hi = std::min((last - 1) / fc + 1, reach_hi);
-        xsimd::batch<scalar_type> acc(scalar_type(0));
-        scalar_type tails = 0;
-        for (Eigen::Index fr = row_lo; fr < row_hi; ++fr) {
-          const Eigen::Index c0 = std::max(col_lo, first - fr * fc);
-          const Eigen::Index c1 = std::min(col_hi, last - fr * fc);
-          if (c1 <= c0) continue;
-          tails += detail::add_row(d + fr * fc + c0, row_scratch_.data(), c1 - c0, acc);
-        }
-        total += static_cast<double>(xsimd::hadd(acc)) + static_cast<double>(tails);
-      }
-      mean[static_cast<std::size_t>(m)] =
-          static_cast<scalar_type>(total / static_cast<double>(r.rows * r.cols));
-    }
     // Each pose: 0, plus its patches' distances in the order add_band adds them (the band of
     // the field position first, then the patch), then the off-map means in patch order.
+    constexpr Eigen::Index band = band_tiles * width;
     struct term {
       Eigen::Index band;
       scalar_type value;
@@ -716,10 +826,7 @@ class rotated_descriptor_likelihood {
       for (Eigen::Index c = s.col_begin; c < s.col_end; ++c) {
         terms.clear();
         for (Eigen::Index m = 0; m < m_count_; ++m) {
-          const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
-          if (s.row < r.first_row || s.row >= r.first_row + r.rows || c < r.first_col ||
-              c >= r.first_col + r.cols)
-            continue;
+          if (!lands(h, m, s.row, c)) continue;
           const grid_cell o = h.field_offset[static_cast<std::size_t>(m)];
           const Eigen::Index p = (s.row + o.row) * fc + c + o.col;
           const scalar_type* d = field_buffer_.data() + (summed ? 0 : m) * field_buffer_.rows();
@@ -732,9 +839,7 @@ class rotated_descriptor_likelihood {
         for (Eigen::Index m = 0; m < m_count_; ++m) {
           const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
           if (r.rows <= 0 || r.cols <= 0) continue;  // never on the map: nothing added
-          if (s.row < r.first_row || s.row >= r.first_row + r.rows || c < r.first_col ||
-              c >= r.first_col + r.cols)
-            v += mean[static_cast<std::size_t>(m)];
+          if (!lands(h, m, s.row, c)) v += means_[static_cast<std::size_t>(a * m_count_ + m)];
         }
         layer[s.row * cols_ + c] = v;
       }
@@ -813,6 +918,9 @@ class rotated_descriptor_likelihood {
   mutable std::vector<row_segment> segments_;
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> field_buffer_;
   mutable std::vector<scalar_type> row_scratch_;  // add_row's destination, discarded
+  mutable std::vector<scalar_type> norms_;        // the wanted descriptors' squared norms
+  mutable std::vector<char> off_;                 // per a M + m: some requested pose off the map
+  mutable std::vector<scalar_type> means_;        // per a M + m: its off-map mean (off_ only)
 };
 
 }  // namespace tacmap
