@@ -5,6 +5,12 @@
 //
 //   TACMAP_BENCH_MAP=640x480 build/release/bench/tacmap_tracking_bench --benchmark_repetitions=5
 //
+// Unknown heading (pose_*): a pose-grid filter with the rotated classic_sift model over 36
+// headings — the first touch, a touch once localized (full and tracked: the model's hook then
+// computes only the support's headings and field tiles), and the tracked touch's predict and
+// update apart (both still pass over the whole grid: the pose predict, and the filter's support
+// search and rescaling).
+//
 // The first touch also runs on 2 threads (issue 14, item 5): thread_pool_executor and, where
 // tacmap::tbb exists, oneTBB — the same filter, so the ratios are of one run:
 //   TACMAP_BENCH_MAP=640x480 build/release/bench/tacmap_tracking_bench
@@ -15,15 +21,20 @@
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <type_traits>
+#include <utility>
 
 #include "bench_maps.hpp"
 #include "tacmap/descriptor/dense_sift.hpp"
 #include "tacmap/executor/thread_pool.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/grid/planar_grid.hpp"
+#include "tacmap/grid/pose_grid.hpp"
 #include "tacmap/localizer.hpp"
 #include "tacmap/measurement/descriptor_likelihood.hpp"
+#include "tacmap/measurement/rotated_descriptor_likelihood.hpp"
 #include "tacmap/motion/odometry_gaussian.hpp"
+#include "tacmap/motion/pose_odometry_gaussian.hpp"
 #ifdef TACMAP_BENCH_TBB
 #include "tacmap/executor/tbb_executor.hpp"
 #endif
@@ -87,6 +98,36 @@ tacmap::planar_localizer_filter& latent(bool floor) {
   return *f;
 }
 
+// Unknown heading: the rotated classic_sift model over 36 headings (10 degree steps), the
+// default pose motion. The touch is cut from the map at heading 0 (layer 0).
+using pose_filter =
+    tacmap::bayes_filter<tacmap::pose_grid<float>, tacmap::pose_odometry_gaussian,
+                         tacmap::rotated_descriptor_likelihood<tacmap::classic_sift>>;
+
+pose_filter& pose() {
+  static std::unique_ptr<pose_filter> f = [] {
+    const tacmap::pose_grid<float> grid(
+        tacmap::planar_grid<float>({.width = map().cols(), .height = map().rows()}, mm_per_px,
+                                   window),
+        36);
+    return std::make_unique<pose_filter>(
+        grid, tacmap::pose_odometry_gaussian{},
+        tacmap::rotated_descriptor_likelihood<tacmap::classic_sift>(tacmap::classic_sift{}, map(),
+                                                                    grid));
+  }();
+  return *f;
+}
+
+// 4 px right and back: in the map frame (planar odometry) or the sensor's (pose odometry; the
+// touch is at heading 0, so the same move).
+template <class Filter>
+std::pair<typename Filter::control_type, typename Filter::control_type> moves() {
+  if constexpr (std::is_same_v<typename Filter::control_type, tacmap::sensor_odometry>)
+    return {{.du_mm = 4 * mm_per_px}, {.du_mm = -4 * mm_per_px}};
+  else
+    return {{.dx_mm = 4 * mm_per_px}, {.dx_mm = -4 * mm_per_px}};
+}
+
 // Localized: three full updates at the touch position.
 template <class Filter>
 void localize(Filter& f) {
@@ -115,7 +156,7 @@ void localized_touch(benchmark::State& state, Filter& f, bool tracking) {
   localize(f);
   if (tracking) f.set_tracking({.epsilon = 1e-6});
   const auto a = cut(), b = cut(4);
-  const tacmap::odometry there{.dx_mm = 4 * mm_per_px}, back{.dx_mm = -4 * mm_per_px};
+  const auto [there, back] = moves<Filter>();
   bool at_a = true;
   double evaluated = 0.0, tracked = 0.0, touches = 0.0;
   for (auto _ : state) {
@@ -139,7 +180,7 @@ void localized_part(benchmark::State& state, Filter& f, bool update_only) {
   localize(f);
   f.set_tracking({.epsilon = 1e-6});
   const auto a = cut(), b = cut(4);
-  const tacmap::odometry there{.dx_mm = 4 * mm_per_px}, back{.dx_mm = -4 * mm_per_px};
+  const auto [there, back] = moves<Filter>();
   bool at_a = true;
   double windowed = 0.0, touches = 0.0;
   for (auto _ : state) {
@@ -196,6 +237,11 @@ void plain_predict_whole(benchmark::State& state) {
 }
 void plain_touch_full(benchmark::State& state) { localized_touch(state, plain(), false); }
 void plain_touch_tracked(benchmark::State& state) { localized_touch(state, plain(), true); }
+void pose_first_touch(benchmark::State& state) { first_touch(state, pose()); }
+void pose_touch_full(benchmark::State& state) { localized_touch(state, pose(), false); }
+void pose_touch_tracked(benchmark::State& state) { localized_touch(state, pose(), true); }
+void pose_predict(benchmark::State& state) { localized_part(state, pose(), false); }
+void pose_update_tracked(benchmark::State& state) { localized_part(state, pose(), true); }
 void latent_first_touch(benchmark::State& state) { first_touch(state, latent(false)); }
 void latent_touch_full(benchmark::State& state) { localized_touch(state, latent(false), false); }
 void latent_touch_tracked(benchmark::State& state) { localized_touch(state, latent(false), true); }
@@ -226,6 +272,11 @@ BENCHMARK(plain_touch_tracked)->Unit(benchmark::kMicrosecond);
 BENCHMARK(plain_predict)->Unit(benchmark::kMicrosecond);
 BENCHMARK(plain_predict_whole)->Unit(benchmark::kMicrosecond);
 BENCHMARK(plain_update_tracked)->Unit(benchmark::kMicrosecond);
+BENCHMARK(pose_first_touch)->Unit(benchmark::kMillisecond);
+BENCHMARK(pose_touch_full)->Unit(benchmark::kMicrosecond);
+BENCHMARK(pose_touch_tracked)->Unit(benchmark::kMicrosecond);
+BENCHMARK(pose_predict)->Unit(benchmark::kMicrosecond);
+BENCHMARK(pose_update_tracked)->Unit(benchmark::kMicrosecond);
 BENCHMARK(latent_first_touch)->Unit(benchmark::kMillisecond);
 BENCHMARK(latent_touch_full)->Unit(benchmark::kMicrosecond);
 BENCHMARK(latent_touch_tracked)->Unit(benchmark::kMicrosecond);
