@@ -46,4 +46,19 @@ void time_touches(benchmark::State& state, Filter& filter, const tacmap::image<f
   }
 }
 
+// Times the first touch: the update of a uniform belief with touch `z` (the whole grid; tracking
+// off), the reset outside the timing. Counter `states`: the grid's size.
+template <class Filter>
+void time_first_touch(benchmark::State& state, Filter& filter, const tacmap::image<float>& z) {
+  filter.set_tracking({});
+  for (auto _ : state) {
+    state.PauseTiming();
+    filter.reset();
+    state.ResumeTiming();
+    filter.update(z);
+    benchmark::DoNotOptimize(filter.belief().data());
+  }
+  state.counters["states"] = static_cast<double>(filter.grid().size());
+}
+
 }  // namespace tacmap_bench

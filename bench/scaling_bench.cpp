@@ -112,33 +112,20 @@ void pose_prepare(benchmark::State& state, Eigen::Index cols, Eigen::Index rows)
   state.counters["states"] = static_cast<double>(planar_grid_of(map).size() * headings);
 }
 
-template <class Filter>
-void time_first_touch(benchmark::State& state, Filter& f, const tacmap::image<float>& map) {
-  const auto z = cut(map);
-  for (auto _ : state) {
-    state.PauseTiming();
-    f.reset();
-    state.ResumeTiming();
-    f.update(z);
-    benchmark::DoNotOptimize(f.belief().data());
-  }
-  state.counters["states"] = static_cast<double>(f.grid().size());
-}
-
 void planar_first_touch(benchmark::State& state, Eigen::Index cols, Eigen::Index rows) {
-  time_first_touch(state, planar(cols, rows), map_of(cols, rows));
+  tacmap_bench::time_first_touch(state, planar(cols, rows), cut(map_of(cols, rows)));
 }
 
 void planar_first_touch_2_threads(benchmark::State& state, Eigen::Index cols, Eigen::Index rows) {
   tacmap::thread_pool_executor pool(2);
   auto& f = planar(cols, rows);
   f.set_executor(pool);
-  time_first_touch(state, f, map_of(cols, rows));
+  tacmap_bench::time_first_touch(state, f, cut(map_of(cols, rows)));
   f.set_executor({});
 }
 
 void pose_first_touch(benchmark::State& state, Eigen::Index cols, Eigen::Index rows) {
-  time_first_touch(state, pose(cols, rows), map_of(cols, rows));
+  tacmap_bench::time_first_touch(state, pose(cols, rows), cut(map_of(cols, rows)));
 }
 
 // A touch once localized (three full updates at the centre first): predict 4 px right or back,

@@ -138,16 +138,7 @@ void localize(Filter& f) {
 
 template <class Filter>
 void first_touch(benchmark::State& state, Filter& f) {
-  f.set_tracking({});
-  const auto z = cut();
-  for (auto _ : state) {
-    state.PauseTiming();
-    f.reset();
-    state.ResumeTiming();
-    f.update(z);
-    benchmark::DoNotOptimize(f.belief().data());
-  }
-  state.counters["states"] = static_cast<double>(f.grid().size());
+  tacmap_bench::time_first_touch(state, f, cut());
 }
 
 // A touch once localized: predict 4 px right or back, update with the window there.

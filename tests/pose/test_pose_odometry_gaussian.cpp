@@ -313,3 +313,61 @@ TEST_CASE("pose odometry: NaN odometry and bad turn noise are rejected with the 
   CHECK(message_of([] { (void)pose_odometry_gaussian({.k = 7}); }).find("k = 7") !=
         std::string::npos);
 }
+
+static_assert(tacmap::moves_box<pose_odometry_gaussian, tacmap::pose_grid<float>>);
+static_assert(tacmap::moves_box<pose_odometry_gaussian, tacmap::pose_grid<double>>);
+
+TEST_CASE("pose odometry: predict_box moves a box's mass in every layer as predict does") {
+  // A belief inside a box of every layer (mass in several layers, a turn with a fraction, a
+  // translation with a fraction in each layer's frame): predict_box gives predict's belief, up
+  // to rounding, and leaves the states outside the box as they were.
+  const auto g = grid<double>(12);
+  const pose_odometry_gaussian m({.sigma_mm = 1.2, .sigma_rad = 0.3});
+  const tacmap::grid_box box{.row = 11, .col = 9, .rows = 6, .cols = 8};
+  Eigen::ArrayXd inside = Eigen::ArrayXd::Zero(g.size());
+  unsigned seed = 7;
+  for (Eigen::Index a : {0, 1, 5, 11})
+    for (Eigen::Index r = box.row; r < box.row + box.rows; ++r)
+      for (Eigen::Index c = box.col; c < box.col + box.cols; ++c) {
+        seed = seed * 1103515245U + 12345U;
+        inside(g.index(a, {r, c})) = 0.1 + static_cast<double>(seed % 1000U) / 1000.0;
+      }
+  inside /= inside.sum();
+  const sensor_odometry u{.du_mm = 2.3 * mm_per_px, .dv_mm = -1.6 * mm_per_px, .dtheta_rad = 0.7};
+  tacmap::prediction_report report;
+  const Eigen::ArrayXd expected = predict(m, g, inside, u, &report);
+  CHECK(report.mass_lost == doctest::Approx(0.0).epsilon(1e-12));
+  // Outside the box: a faint background, which predict_box must leave in place.
+  Eigen::ArrayXd background = Eigen::ArrayXd::Zero(g.size());
+  for (Eigen::Index i = 0; i < g.size(); ++i) {
+    const tacmap::grid_cell c = g.cell(i);
+    if (c.row < box.row || c.row >= box.row + box.rows || c.col < box.col ||
+        c.col >= box.col + box.cols)
+      background(i) = 1e-9 * static_cast<double>(1 + i % 7);
+  }
+  Eigen::ArrayXd belief = inside + background;
+  REQUIRE(m.predict_box(g, belief, box, u));
+  CHECK((belief - background - expected).abs().maxCoeff() <= 1e-12);
+  CHECK(belief.sum() == doctest::Approx(1.0 + background.sum()).epsilon(1e-12));
+  // float: the same within float rounding.
+  const auto gf = grid<float>(12);
+  Eigen::ArrayXf bf = inside.cast<float>();
+  REQUIRE(m.predict_box(gf, bf, box, u));
+  CHECK((bf.cast<double>() - expected).abs().maxCoeff() <= 1e-6);
+}
+
+TEST_CASE("pose odometry: predict_box refuses, belief unchanged, where predict would lose mass") {
+  const auto g = grid<double>(8);
+  const pose_odometry_gaussian m;
+  const tacmap::grid_box box{.row = 2, .col = 20, .rows = 4, .cols = 4};
+  Eigen::ArrayXd belief = Eigen::ArrayXd::Constant(g.size(), 1.0 / static_cast<double>(g.size()));
+  const Eigen::ArrayXd before = belief;
+  // Layer 0 moves +x, layer 2 (90 deg) +y: some layer's window leaves the grid.
+  CHECK_FALSE(m.predict_box(g, belief, box, {.du_mm = 5.0 * mm_per_px}));
+  CHECK((belief == before).all());
+  CHECK_FALSE(
+      m.predict_box(g, belief, {.row = 12, .col = 12, .rows = 4, .cols = 4}, {.du_mm = nan_value}));
+  CHECK_FALSE(
+      m.predict_box(g, belief, {.row = 12, .col = 12, .rows = 4, .cols = 4}, {.dtheta_rad = 1e4}));
+  CHECK((belief == before).all());
+}

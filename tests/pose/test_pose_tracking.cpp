@@ -244,3 +244,55 @@ TEST_CASE("a tracked pose filter equals its full update within the bound, same M
   CHECK(std::abs(e.map_mm(0) / mm - cx) <= 2.0);
   CHECK(std::abs(e.map_mm(1) / mm - cy) <= 2.0);
 }
+
+TEST_CASE("a tracked pose filter's windowed predicts stay within their bound of the whole grid's") {
+  // One filter tracking touch after touch (predict right after a tracked update moves only the
+  // support's box, in every heading layer), each prediction compared with the whole grid's
+  // prediction of the same belief, and the filter with a full-grid twin at every update.
+  const pose_grid_t grid = grid64(36);
+  const double mm = grid.mm_per_px();
+  using model_t = tacmap::rotated_descriptor_likelihood<tacmap::classic_sift>;
+  tacmap::bayes_filter tracked(grid, tacmap::pose_odometry_gaussian({.sigma_mm = 0.4}),
+                               model_t(tacmap::classic_sift{}, map64(), grid));
+  double theta = 1.0, cx = 31.0, cy = 30.0;
+  const auto touch = [&] { return pose_test::render(map64(), cx, cy, theta, grid.window_size()); };
+  tracked.update(touch());
+  tracked.update(touch());
+  auto full = tracked;
+  tracked.set_tracking({.epsilon = 1e-6});
+  int windowed = 0;
+  for (int step = 0; step < 8; ++step) {
+    CAPTURE(step);
+    const double du = step % 2 == 0 ? 2.0 : -1.0;
+    const double dv = step % 3 == 0 ? 1.0 : -2.0;
+    const double dtheta = step == 3 ? 0.5 * grid.angle_step_rad() : 0.0;
+    cx += std::cos(theta) * du - std::sin(theta) * dv;
+    cy += std::sin(theta) * du + std::cos(theta) * dv;
+    theta += dtheta;
+    const tacmap::sensor_odometry u{.du_mm = du * mm, .dv_mm = dv * mm, .dtheta_rad = dtheta};
+    auto reference = tracked;
+    reference.set_tracking({});  // forgets the support box: the whole grid moves
+    reference.predict(u);
+    const tacmap::prediction_report pr = tracked.predict(u);
+    const double tv_predict =
+        0.5 * (tracked.belief().cast<double>() - reference.belief().cast<double>()).abs().sum();
+    if (pr.windowed) {
+      ++windowed;
+      CHECK(pr.tracking_error_bound <= 1e-6 * (1.0 + 1e-4));
+      CHECK(tv_predict <= pr.tracking_error_bound + 1e-5);
+      CHECK(static_cast<double>(tracked.belief().sum()) == doctest::Approx(1.0).epsilon(1e-5));
+    } else {
+      CHECK(tv_predict == 0.0);
+    }
+    full.predict(u);
+    const auto z = touch();
+    tracked.update(z);
+    full.update(z);
+    CHECK(tracked.estimate().map_index == full.estimate().map_index);
+    CHECK(0.5 * (tracked.belief().cast<double>() - full.belief().cast<double>()).abs().sum() <=
+          1e-2);
+  }
+  // This scenario's touches contradict the prediction now and then (full updates, rho above
+  // the tolerance), after which the next predict moves the whole grid: 3 of 8 are windowed.
+  CHECK(windowed >= 3);
+}

@@ -227,8 +227,9 @@ class bayes_filter {
 
   /// Control update with odometry `u`. If the motion model throws (invalid odometry, all mass
   /// off the grid) the exception propagates and the belief is unchanged. In tracking mode, right
-  /// after a tracked update and with a motion model that `moves_box` (odometry_gaussian), only
-  /// the mass inside the bounding box of that update's support is moved; the states outside
+  /// after a tracked update and with a motion model that `moves_box` (odometry_gaussian,
+  /// pose_odometry_gaussian: the box in every heading layer), only the mass inside the bounding
+  /// box of that update's support is moved; the states outside
   /// keep their values (their mass r <= epsilon up to float rounding, see `tracking_params`):
   ///   TV(this prediction, the whole grid's) <= r
   /// (the report's `windowed` and `tracking_error_bound`). The whole grid moves otherwise, and
@@ -473,9 +474,9 @@ class bayes_filter {
   belief_type log_likelihood_;
   tracking_params tracking_;
   std::vector<state_range> support_;  // tracking: the states evaluated
-  // Tracking: after a tracked update on a single-layer grid, the bounding box of its support on
-  // the belief image and a bound on the posterior's mass outside it (what the next predict may
-  // leave in place); empty once the belief changed any other way.
+  // Tracking: after a tracked update, the bounding box of its support on the belief image (every
+  // layer's states united) and a bound on the posterior's mass outside it (what the next predict
+  // may leave in place); empty once the belief changed any other way.
   struct tracked_box {
     grid_box box;
     double outside = 0.0;
@@ -517,9 +518,9 @@ prediction_report bayes_filter<Grid, Motion, Measurement>::predict(const control
     // value left in place both have mass <= r), for a few hundred states instead of all of them.
     // A support spread over the map (several repeats of a texture) has a box as wide as the
     // grid: moving it would cost more than the whole grid's passes.
-    const auto small = [&](const grid_box& b) {
+    const auto small = [&](const grid_box& b) {  // the box's states in every layer
       return static_cast<double>(b.rows * b.cols) <=
-             tracking_.max_support * static_cast<double>(grid_.size());
+             tracking_.max_support * static_cast<double>(grid_.rows() * grid_.cols());
     };
     if (tracked_box_ && tracked_box_->outside <= tracking_.epsilon * (1.0 + 1e-4) &&
         small(tracked_box_->box) && motion_.predict_box(grid_, belief_, tracked_box_->box, u)) {
@@ -638,18 +639,26 @@ update_path bayes_filter<Grid, Motion, Measurement>::tracked_update(const measur
     for (const state_range& r : in)
       belief_.segment(r.begin, r.end - r.begin) =
           scratch_.segment(r.begin, r.end - r.begin) * scale;
-    if (n == grid_.rows() * grid_.cols()) {
-      // The support's bounding box for the next predict; the posterior's mass outside the
-      // support, s.outside * outside_factor / total, is at most epsilon (outside_factor is at
-      // most every factor inside): the states outside the box hold no more.
-      const Eigen::Index cols = grid_.cols();
-      Eigen::Index r0 = n, r1 = -1, c0 = cols, c1 = -1;
+    {
+      // The support's bounding box for the next predict, on the belief image (over every layer
+      // of a layered grid: the box of each layer's states, united); the posterior's mass outside
+      // the support, s.outside * outside_factor / total, is at most epsilon (outside_factor is
+      // at most every factor inside): the states outside the box hold no more.
+      const Eigen::Index cols = grid_.cols(), plane = grid_.rows() * cols;
+      Eigen::Index r0 = grid_.rows(), r1 = -1, c0 = cols, c1 = -1;
       for (const state_range& r : in) {
-        const Eigen::Index first = r.begin / cols, last = (r.end - 1) / cols;
+        if (r.begin / plane != (r.end - 1) / plane) {  // across layers: every row and column
+          r0 = c0 = 0;
+          r1 = grid_.rows() - 1;
+          c1 = cols - 1;
+          break;
+        }
+        const Eigen::Index b = r.begin % plane, e = (r.end - 1) % plane;
+        const Eigen::Index first = b / cols, last = e / cols;
         r0 = std::min(r0, first);
         r1 = std::max(r1, last);
-        c0 = std::min(c0, first == last ? r.begin % cols : Eigen::Index{0});
-        c1 = std::max(c1, first == last ? (r.end - 1) % cols : cols - 1);
+        c0 = std::min(c0, first == last ? b % cols : Eigen::Index{0});
+        c1 = std::max(c1, first == last ? e % cols : cols - 1);
       }
       if (r1 >= r0)
         tracked_box_ =

@@ -60,8 +60,9 @@ concept motion_model = state_grid<G> &&
 };
 
 /// Motion models that can move part of a belief in place (tracking mode): for a `const M m`, a
-/// `const G g`, a normalised `belief_array<G> b`, a `grid_box box` inside the belief image and a
-/// control `u`, `m.predict_box(g, b, box, u)` replaces the mass inside `box` by its prediction,
+/// `const G g`, a normalised `belief_array<G> b`, a `grid_box box` inside the belief image (of
+/// every layer, for layered grids) and a control `u`, `m.predict_box(g, b, box, u)` replaces the
+/// mass inside `box` by its prediction,
 /// exactly as `predict` would move it, leaves every state outside `box` unchanged and returns
 /// true; or returns false with `b` unchanged when it cannot (the moved mass would reach the
 /// grid's edge, a control `predict` would refuse): the caller then predicts the whole grid.

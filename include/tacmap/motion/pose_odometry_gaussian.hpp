@@ -90,7 +90,6 @@ class pose_odometry_gaussian {
     const Eigen::Index plane = grid.layer_size();
     TACMAP_ASSERT(in.size() == plane * layers && out.size() == in.size(),
                   "belief buffers must match the grid");
-    const double step = 2.0 * std::numbers::pi / static_cast<double>(layers);
     if (std::abs(u.dtheta_rad) > 1e3)
       detail::fail("pose_odometry_gaussian: turn dtheta = ", u.dtheta_rad,
                    " rad; expected the turn since the previous touch (radians, not degrees?)");
@@ -99,12 +98,7 @@ class pose_odometry_gaussian {
     auto& moved = moved_<T>();
     moved.resize(in.size());
     // Pixels via mm_per_px(): the only scale metric_pose_grid promises.
-    double sigma_mm = params_.sigma_mm;
-    if (params_.heading_cell_spread && layers > 1) {
-      const double d = std::hypot(u.du_mm, u.dv_mm) * step;
-      sigma_mm = std::sqrt(sigma_mm * sigma_mm + d * d / 12.0);
-    }
-    const double sigma_px = sigma_mm / grid.mm_per_px();
+    const double sigma_px = translation_sigma_mm(u, layers) / grid.mm_per_px();
     for (Eigen::Index a = 0; a < layers; ++a) {
       const Eigen::Map<const image<T>> src(in.data() + a * plane, grid.rows(), grid.cols());
       Eigen::Map<image<T>> dst(moved.data() + a * plane, grid.rows(), grid.cols());
@@ -119,35 +113,17 @@ class pose_odometry_gaussian {
       planar_.transport(src, dst, dx / grid.mm_per_px(), dy / grid.mm_per_px(), sigma_px);
     }
 
-    // 2. Turn: out_b = sum_a moved_a w(b - a), circular. Taps: a Gaussian over whole steps
-    //    (normalised over the taps kept), each split bilinearly by the turn's fraction.
-    const double shift = u.dtheta_rad / step;
-    const double whole = std::floor(shift);
-    const double frac = shift - whole;
-    const double sigma_steps = params_.sigma_rad / step;
-    const auto radius = static_cast<Eigen::Index>(
-        std::min<double>(std::ceil(3.0 * sigma_steps), static_cast<double>(layers)));
-    std::vector<double> tap(static_cast<std::size_t>(layers), 0.0);  // weight per offset mod L
-    double norm = 0.0;
-    for (Eigen::Index j = -radius; j <= radius; ++j)
-      norm += std::exp(-0.5 * static_cast<double>(j * j) / (sigma_steps * sigma_steps));
-    const auto base = static_cast<Eigen::Index>(whole);
+    // 2. Turn: out_b = sum_a moved_a w(b - a), circular (see `turn_taps`). Output layer by
+    //    output layer, each written once as the weighted sum of its taps' source layers, instead
+    //    of every tap sweeping all of `out` (36 planes, 1.2 MB for the 120 px grid) once more.
+    const turn t = turn_taps(u.dtheta_rad, layers);
     const auto wrap = [layers](Eigen::Index o) { return ((o % layers) + layers) % layers; };
-    for (Eigen::Index j = -radius; j <= radius; ++j) {
-      const double g =
-          std::exp(-0.5 * static_cast<double>(j * j) / (sigma_steps * sigma_steps)) / norm;
-      tap[static_cast<std::size_t>(wrap(j + base))] += g * (1.0 - frac);
-      tap[static_cast<std::size_t>(wrap(j + base + 1))] += g * frac;
-    }
-    // Output layer by output layer, each written once as the weighted sum of its taps' source
-    // layers, instead of every tap sweeping all of `out` (36 planes, 1.2 MB for the 120 px
-    // grid) once more.
-    std::vector<Eigen::Index> offsets;  // nonzero taps only
+    std::vector<Eigen::Index> offsets;  // taps nonzero in T only
     std::vector<T> weights;
-    for (Eigen::Index o = 0; o < layers; ++o) {
-      const auto w = static_cast<T>(tap[static_cast<std::size_t>(o)]);
+    for (std::size_t k = 0; k < t.offsets.size(); ++k) {
+      const auto w = static_cast<T>(t.weights[k]);
       if (w > T(0)) {
-        offsets.push_back(o);
+        offsets.push_back(t.offsets[k]);
         weights.push_back(w);
       }
     }
@@ -171,7 +147,135 @@ class pose_odometry_gaussian {
     });
   }
 
+  /// Tracking mode (`moves_box`): the mass inside `box` of every heading layer moved as
+  /// `predict` moves it, in place; every state outside the box (in any layer) keeps its value.
+  /// Per layer a, the box is copied with the planar model's reach of zero cells on each side,
+  /// transported by the fraction of that layer's map-frame shift only, and the turn's taps add
+  /// each moved window, at the box's place moved by the layer's integer shift, into the layers
+  /// the turn carries it to: each output is the same weighted sum of the same taps as in
+  /// `predict`, less the taps that read outside the box. False, `belief` unchanged, when a moved
+  /// window would reach past the grid's edge (where `predict` drops or clamps mass) or the
+  /// odometry is not finite or a turn `predict` refuses.
+  template <metric_pose_grid G>
+  bool predict_box(const G& grid, belief_array<G>& belief, const grid_box& box,
+                   const sensor_odometry& u) const {
+    using T = typename G::scalar_type;
+    if (!(std::isfinite(u.du_mm) && std::isfinite(u.dv_mm) && std::isfinite(u.dtheta_rad)) ||
+        std::abs(u.dtheta_rad) > 1e3)
+      return false;
+    const auto layers = static_cast<Eigen::Index>(grid.angle_count());
+    const Eigen::Index rows = grid.rows(), cols = grid.cols(), plane = grid.layer_size();
+    if (plane != rows * cols || belief.size() != plane * layers) return false;
+    TACMAP_ASSERT(box.rows > 0 && box.cols > 0 && box.row >= 0 && box.col >= 0 &&
+                      box.row + box.rows <= rows && box.col + box.cols <= cols,
+                  "predict_box: the box must lie inside the belief image");
+    const Eigen::Index pad = planar_.radius_px() + 1;
+    const Eigen::Index h = box.rows + 2 * pad, w = box.cols + 2 * pad;
+    // Where each layer's window lands (its integer shift), all checked before anything moves.
+    std::vector<grid_cell>& at = box_at_;
+    at.resize(static_cast<std::size_t>(layers));
+    std::vector<double>& fraction = box_fraction_;
+    fraction.resize(static_cast<std::size_t>(2 * layers));
+    for (Eigen::Index a = 0; a < layers; ++a) {
+      const double c = std::cos(grid.heading(a)), s = std::sin(grid.heading(a));
+      const double sx = (c * u.du_mm - s * u.dv_mm) / grid.mm_per_px();
+      const double sy = (s * u.du_mm + c * u.dv_mm) / grid.mm_per_px();
+      const double fx = std::floor(sx), fy = std::floor(sy);
+      if (!(std::abs(fx) < static_cast<double>(cols) && std::abs(fy) < static_cast<double>(rows)))
+        return false;
+      const grid_cell corner{box.row - pad + static_cast<Eigen::Index>(fy),
+                             box.col - pad + static_cast<Eigen::Index>(fx)};
+      if (corner.row < 0 || corner.col < 0 || corner.row + h > rows || corner.col + w > cols)
+        return false;
+      at[static_cast<std::size_t>(a)] = corner;
+      fraction[static_cast<std::size_t>(2 * a)] = sx - fx;
+      fraction[static_cast<std::size_t>(2 * a + 1)] = sy - fy;
+    }
+    // 1. Each layer's box, moved by its fraction into a window of its own.
+    const double sigma_px = translation_sigma_mm(u, layers) / grid.mm_per_px();
+    auto& moved = moved_<T>();
+    moved.setZero(layers * h * w);
+    Eigen::Array<T, Eigen::Dynamic, 1> padded = Eigen::Array<T, Eigen::Dynamic, 1>::Zero(h * w);
+    std::vector<char>& has_mass = box_has_mass_;
+    has_mass.assign(static_cast<std::size_t>(layers), 0);
+    for (Eigen::Index a = 0; a < layers; ++a) {
+      Eigen::Map<image<T>> img(belief.data() + a * plane, rows, cols);
+      auto source = img.block(box.row, box.col, box.rows, box.cols);
+      if (!(source.maxCoeff() > T(0))) continue;
+      has_mass[static_cast<std::size_t>(a)] = 1;
+      Eigen::Map<image<T>> in_box(padded.data(), h, w);
+      in_box.block(pad, pad, box.rows, box.cols) = source;
+      Eigen::Map<image<T>> out_box(moved.data() + a * h * w, h, w);
+      planar_.transport(Eigen::Map<const image<T>>(padded.data(), h, w), out_box,
+                        fraction[static_cast<std::size_t>(2 * a)],
+                        fraction[static_cast<std::size_t>(2 * a + 1)], sigma_px);
+      source.setZero();
+    }
+    // 2. The turn: layer b receives w_o times layer (b - o)'s moved window, where it landed.
+    const turn t = turn_taps(u.dtheta_rad, layers);
+    const auto wrap = [layers](Eigen::Index o) { return ((o % layers) + layers) % layers; };
+    for (Eigen::Index b = 0; b < layers; ++b) {
+      Eigen::Map<image<T>> img(belief.data() + b * plane, rows, cols);
+      for (std::size_t k = 0; k < t.offsets.size(); ++k) {
+        const Eigen::Index a = wrap(b - t.offsets[k]);
+        const auto weight = static_cast<T>(t.weights[k]);
+        if (!has_mass[static_cast<std::size_t>(a)] || !(weight > T(0))) continue;
+        const grid_cell corner = at[static_cast<std::size_t>(a)];
+        img.block(corner.row, corner.col, h, w) +=
+            Eigen::Map<const image<T>>(moved.data() + a * h * w, h, w) * weight;
+      }
+    }
+    return true;
+  }
+
  private:
+  // The turn's taps: the weight of offset o (layer a's mass to layer a + o, mod the layer
+  // count), nonzero ones only. A Gaussian of sigma_rad over whole steps (normalised over the
+  // taps kept), each split bilinearly by the turn's fraction of a step.
+  struct turn {
+    std::vector<Eigen::Index> offsets;
+    std::vector<double> weights;
+  };
+  [[nodiscard]] turn turn_taps(double dtheta_rad, Eigen::Index layers) const {
+    const double step = 2.0 * std::numbers::pi / static_cast<double>(layers);
+    const double shift = dtheta_rad / step;
+    const double whole = std::floor(shift);
+    const double frac = shift - whole;
+    const double sigma_steps = params_.sigma_rad / step;
+    const auto radius = static_cast<Eigen::Index>(
+        std::min<double>(std::ceil(3.0 * sigma_steps), static_cast<double>(layers)));
+    std::vector<double> tap(static_cast<std::size_t>(layers), 0.0);  // weight per offset mod L
+    double norm = 0.0;
+    for (Eigen::Index j = -radius; j <= radius; ++j)
+      norm += std::exp(-0.5 * static_cast<double>(j * j) / (sigma_steps * sigma_steps));
+    const auto base = static_cast<Eigen::Index>(whole);
+    const auto wrap = [layers](Eigen::Index o) { return ((o % layers) + layers) % layers; };
+    for (Eigen::Index j = -radius; j <= radius; ++j) {
+      const double g =
+          std::exp(-0.5 * static_cast<double>(j * j) / (sigma_steps * sigma_steps)) / norm;
+      tap[static_cast<std::size_t>(wrap(j + base))] += g * (1.0 - frac);
+      tap[static_cast<std::size_t>(wrap(j + base + 1))] += g * frac;
+    }
+    turn t;
+    for (Eigen::Index o = 0; o < layers; ++o)
+      if (tap[static_cast<std::size_t>(o)] > 0.0) {
+        t.offsets.push_back(o);
+        t.weights.push_back(tap[static_cast<std::size_t>(o)]);
+      }
+    return t;
+  }
+
+  // The translation noise with the heading cell's spread (`heading_cell_spread`).
+  [[nodiscard]] double translation_sigma_mm(const sensor_odometry& u, Eigen::Index layers) const {
+    double sigma_mm = params_.sigma_mm;
+    if (params_.heading_cell_spread && layers > 1) {
+      const double step = 2.0 * std::numbers::pi / static_cast<double>(layers);
+      const double d = std::hypot(u.du_mm, u.dv_mm) * step;
+      sigma_mm = std::sqrt(sigma_mm * sigma_mm + d * d / 12.0);
+    }
+    return sigma_mm;
+  }
+
   template <class T>
   Eigen::Array<T, Eigen::Dynamic, 1>& moved_() const {
     if constexpr (std::is_same_v<T, float>)
@@ -186,6 +290,10 @@ class pose_odometry_gaussian {
   // object is not reentrant, like odometry_gaussian.
   mutable Eigen::ArrayXf moved_f_;
   mutable Eigen::ArrayXd moved_d_;
+  // predict_box's scratch: each layer's window corner, shift fractions, and whether it has mass.
+  mutable std::vector<grid_cell> box_at_;
+  mutable std::vector<double> box_fraction_;
+  mutable std::vector<char> box_has_mass_;
 };
 
 }  // namespace tacmap
