@@ -214,6 +214,18 @@ inline void check_tactile_image(const char* who, const image<float>& z, pixel_si
   if (!all_finite(z)) fail(who, ": the tactile image contains NaN or infinite pixels");
 }
 
+/// The tracking hook's bound on log p(z | x) of the descriptor models (`P`: their parameters,
+/// with shape, tempering, epsilon): distances are >= 0, so the exponential shape's
+/// -tempering d / tau is <= 0 and eq. (2)'s -tempering log(d + epsilon) is
+/// <= -tempering log(epsilon), returned a hair higher so that the float logarithm (and epsilon
+/// rounded to float) of the model itself cannot exceed it.
+template <class P>
+[[nodiscard]] double log_likelihood_bound(const P& params) {
+  if (params.shape == likelihood_shape::exponential) return 0.0;
+  const double b = -params.tempering * std::log(params.epsilon);
+  return b + 1e-5 * (1.0 + std::abs(b));
+}
+
 }  // namespace detail
 
 /// The paper's measurement model over a `planar_grid`, for any `descriptor`.
@@ -457,9 +469,7 @@ class descriptor_likelihood {
   /// (2)'s -tempering log(d + epsilon) <= -tempering log(epsilon) (returned a hair higher, so
   /// that the float logarithm of the model itself cannot exceed it).
   [[nodiscard]] double log_likelihood_bound() const {
-    if (params_.shape == likelihood_shape::exponential) return 0.0;
-    const double b = -params_.tempering * std::log(params_.epsilon);
-    return b + 1e-5 * (1.0 + std::abs(b));
+    return detail::log_likelihood_bound(params_);
   }
 
   /// Tracking hook: log p(z | x) at (at least) the states of `states` (sorted, disjoint ranges),

@@ -268,9 +268,7 @@ class rotated_descriptor_likelihood {
   /// is <= -tempering log(epsilon) — returned a hair higher, so that the float logarithm (and
   /// epsilon rounded to float) of the model itself cannot exceed it. As descriptor_likelihood.
   [[nodiscard]] double log_likelihood_bound() const {
-    if (params_.shape == likelihood_shape::exponential) return 0.0;
-    const double b = -params_.tempering * std::log(params_.epsilon);
-    return b + 1e-5 * (1.0 + std::abs(b));
+    return detail::log_likelihood_bound(params_);
   }
 
   /// Tracking hook: log p(z | x, theta) at (at least) the poses of `states` (sorted, disjoint
@@ -532,12 +530,36 @@ class rotated_descriptor_likelihood {
   // (all pairs: 74 KB) or x 108 descriptors (aligned, 3 patches x 36 headings: 221 KB).
   static constexpr Eigen::Index band_tiles = 64;
 
+  // The distances of band positions [first, last) (band row p - first, column `d`) that patch
+  // reach r at field offset o reads, added row by row by add_row into dest(field row, first
+  // column) and summed: in float within the band (a few hundred values), returned in double
+  // (the bands are summed in double). One routine for the whole grid's pass and the tracking
+  // hook's off-map means, so that both sum in the same order.
+  template <class Dest>
+  double add_reach(const scalar_type* d, const patch_reach& r, grid_cell o, Eigen::Index first,
+                   Eigen::Index last, Dest dest) const {
+    const Eigen::Index fc = field_cols_;
+    // Field rows of this band that the reach reads, and its columns.
+    const Eigen::Index row_lo = std::max(first / fc, r.first_row + o.row);
+    const Eigen::Index row_hi = std::min((last - 1) / fc + 1, r.first_row + r.rows + o.row);
+    const Eigen::Index col_lo = r.first_col + o.col;
+    const Eigen::Index col_hi = col_lo + r.cols;
+    xsimd::batch<scalar_type> acc(scalar_type(0));
+    scalar_type tails = 0;
+    for (Eigen::Index fr = row_lo; fr < row_hi; ++fr) {
+      const Eigen::Index c0 = std::max(col_lo, first - fr * fc);
+      const Eigen::Index c1 = std::min(col_hi, last - fr * fc);
+      if (c1 <= c0) continue;
+      tails += detail::add_row(d + fr * fc + c0 - first, dest(fr, c0), c1 - c0, acc);
+    }
+    return static_cast<double>(xsimd::hadd(acc)) + static_cast<double>(tails);
+  }
+
   // Adds the distances of field positions [first, last) (band row p - first) to every layer:
   // patch m of heading a at state x reads position x + o_{a,m}, for the states of its reach.
   template <class Out>
   void add_band(const Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>& band,
                 Eigen::Index first, Eigen::Index last, Out& out) const {
-    const Eigen::Index fc = field_cols_;
     const Eigen::Index plane = rows_ * cols_;
     for (Eigen::Index a = 0; a < angles_; ++a) {
       const heading_tables& h = heading_[static_cast<std::size_t>(a)];
@@ -548,23 +570,10 @@ class rotated_descriptor_likelihood {
         const grid_cell o = h.field_offset[static_cast<std::size_t>(m)];
         // All pairs: heading a's column holds S = sum_n D_n; aligned: D_m in column m A + a.
         const scalar_type* d = &band(0, params_.pairs == pairing::all_pairs ? a : m * angles_ + a);
-        // Field rows of this band that the reach reads, and its columns.
-        const Eigen::Index row_lo = std::max(first / fc, r.first_row + o.row);
-        const Eigen::Index row_hi = std::min((last - 1) / fc + 1, r.first_row + r.rows + o.row);
-        const Eigen::Index col_lo = r.first_col + o.col;
-        const Eigen::Index col_hi = col_lo + r.cols;
-        // The band's few rows summed in float (a few hundred values), the bands in double.
-        xsimd::batch<scalar_type> acc(scalar_type(0));
-        scalar_type tails = 0;
-        for (Eigen::Index fr = row_lo; fr < row_hi; ++fr) {
-          const Eigen::Index c0 = std::max(col_lo, first - fr * fc);
-          const Eigen::Index c1 = std::min(col_hi, last - fr * fc);
-          if (c1 <= c0) continue;
-          tails += detail::add_row(d + fr * fc + c0 - first,
-                                   layer + (fr - o.row) * cols_ + (c0 - o.col), c1 - c0, acc);
-        }
         sums_[static_cast<std::size_t>(a * m_count_ + m)] +=
-            static_cast<double>(xsimd::hadd(acc)) + static_cast<double>(tails);
+            add_reach(d, r, o, first, last, [&](Eigen::Index fr, Eigen::Index c0) {
+              return layer + (fr - o.row) * cols_ + (c0 - o.col);
+            });
       }
     }
   }
@@ -728,20 +737,9 @@ class rotated_descriptor_likelihood {
         const heading_tables& h = heading_[static_cast<std::size_t>(it.a)];
         const patch_reach& r = h.reach[static_cast<std::size_t>(it.m)];
         const grid_cell o = h.field_offset[static_cast<std::size_t>(it.m)];
-        const scalar_type* d = &band(0, it.out);
-        const Eigen::Index row_lo = std::max(first / fc, r.first_row + o.row);
-        const Eigen::Index row_hi = std::min((last - 1) / fc + 1, r.first_row + r.rows + o.row);
-        const Eigen::Index col_lo = r.first_col + o.col;
-        const Eigen::Index col_hi = col_lo + r.cols;
-        xsimd::batch<scalar_type> acc(scalar_type(0));
-        scalar_type tails = 0;
-        for (Eigen::Index fr = row_lo; fr < row_hi; ++fr) {
-          const Eigen::Index c0 = std::max(col_lo, first - fr * fc);
-          const Eigen::Index c1 = std::min(col_hi, last - fr * fc);
-          if (c1 <= c0) continue;
-          tails += detail::add_row(d + fr * fc + c0 - first, row_scratch_.data(), c1 - c0, acc);
-        }
-        totals[i] += static_cast<double>(xsimd::hadd(acc)) + static_cast<double>(tails);
+        // The sums only (row_scratch_ takes the rows add_row writes): the layer means' order.
+        totals[i] += add_reach(&band(0, it.out), r, o, first, last,
+                               [&](Eigen::Index, Eigen::Index) { return row_scratch_.data(); });
       }
     }
     for (std::size_t i = 0; i < items.size(); ++i) {
