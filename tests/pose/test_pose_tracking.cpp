@@ -121,6 +121,39 @@ void check_ranges_bit_for_bit(const Model& model, const pose_grid_t& grid,
   CHECK(off_map > 0);    // ... and poses whose turned patch leaves the map
 }
 
+// The tracking filters' scenario: a 36-heading classic SIFT filter on map64 and a sensor
+// walking on the map, localized with two full updates at its start.
+struct walking_sensor {
+  using model_t = tacmap::rotated_descriptor_likelihood<tacmap::classic_sift>;
+  pose_grid_t grid = grid64(36);
+  double theta = 1.0;  // rad; the sensor's true heading
+  double cx = 31.0;    // sensor centre, map px
+  double cy = 30.0;
+
+  [[nodiscard]] tacmap::image<float> touch() const {
+    return pose_test::render(map64(), cx, cy, theta, grid.window_size());
+  }
+  [[nodiscard]] auto localized_filter() const {
+    tacmap::bayes_filter f(grid, tacmap::pose_odometry_gaussian({.sigma_mm = 0.4}),
+                           model_t(tacmap::classic_sift{}, map64(), grid));
+    f.update(touch());
+    f.update(touch());
+    return f;
+  }
+  // Step `step` of the walk (sensor frame, px; a turn of `turn` rad at step 3): moves the sensor
+  // and returns the odometry in mm.
+  tacmap::sensor_odometry walk(int step, double turn) {
+    const double du = step % 2 == 0 ? 2.0 : -1.0;
+    const double dv = step % 3 == 0 ? 1.0 : -2.0;
+    const double dtheta = step == 3 ? turn : 0.0;
+    cx += std::cos(theta) * du - std::sin(theta) * dv;
+    cy += std::sin(theta) * du + std::cos(theta) * dv;
+    theta += dtheta;
+    const double mm = grid.mm_per_px();
+    return {.du_mm = du * mm, .dv_mm = dv * mm, .dtheta_rad = dtheta};
+  }
+};
+
 }  // namespace
 
 TEST_CASE_TEMPLATE("the rotated model's tracking hook writes its full log-likelihood, bit for bit",
@@ -195,32 +228,18 @@ TEST_CASE("a tracked pose filter equals its full update within the bound, same M
   // 36 headings, classic SIFT; localized with full updates from a prior around the sensor
   // (what a few touches give), then every step compared: tracked against full from the same
   // predicted belief.
-  const pose_grid_t grid = grid64(36);
-  const double mm = grid.mm_per_px();
-  using model_t = tacmap::rotated_descriptor_likelihood<tacmap::classic_sift>;
-  tacmap::bayes_filter full(grid, tacmap::pose_odometry_gaussian({.sigma_mm = 0.4}),
-                            model_t(tacmap::classic_sift{}, map64(), grid));
-  double theta = 1.0;  // rad; the sensor's true heading
-  double cx = 31.0;    // sensor centre, map px
-  double cy = 30.0;
-  const auto touch = [&] { return pose_test::render(map64(), cx, cy, theta, grid.window_size()); };
-  full.update(touch());
-  full.update(touch());
+  walking_sensor sensor;
+  const pose_grid_t& grid = sensor.grid;
+  auto full = sensor.localized_filter();
   int tracked_steps = 0;
   for (int step = 0; step < 6; ++step) {
     CAPTURE(step);
-    const double du = step % 2 == 0 ? 2.0 : -1.0;
-    const double dv = step % 3 == 0 ? 1.0 : -2.0;
-    const double dtheta = step == 3 ? grid.angle_step_rad() : 0.0;
-    cx += std::cos(theta) * du - std::sin(theta) * dv;
-    cy += std::sin(theta) * du + std::cos(theta) * dv;
-    theta += dtheta;
-    const tacmap::sensor_odometry u{.du_mm = du * mm, .dv_mm = dv * mm, .dtheta_rad = dtheta};
+    const tacmap::sensor_odometry u = sensor.walk(step, grid.angle_step_rad());
     auto tracked = full;
     tracked.set_tracking({.epsilon = 1e-6});
     tracked.predict(u);
     full.predict(u);
-    const auto z = touch();
+    const auto z = sensor.touch();
     const tacmap::update_report rt = tracked.update(z);
     const tacmap::update_report rf = full.update(z);
     CHECK(rf.path == update_path::full);
@@ -241,35 +260,22 @@ TEST_CASE("a tracked pose filter equals its full update within the bound, same M
   CHECK(tracked_steps >= 4);
   // Still where the sensor is.
   const auto e = full.estimate();
-  CHECK(std::abs(e.map_mm(0) / mm - cx) <= 2.0);
-  CHECK(std::abs(e.map_mm(1) / mm - cy) <= 2.0);
+  CHECK(std::abs(e.map_mm(0) / grid.mm_per_px() - sensor.cx) <= 2.0);
+  CHECK(std::abs(e.map_mm(1) / grid.mm_per_px() - sensor.cy) <= 2.0);
 }
 
 TEST_CASE("a tracked pose filter's windowed predicts stay within their bound of the whole grid's") {
   // One filter tracking touch after touch (predict right after a tracked update moves only the
   // support's box, in every heading layer), each prediction compared with the whole grid's
   // prediction of the same belief, and the filter with a full-grid twin at every update.
-  const pose_grid_t grid = grid64(36);
-  const double mm = grid.mm_per_px();
-  using model_t = tacmap::rotated_descriptor_likelihood<tacmap::classic_sift>;
-  tacmap::bayes_filter tracked(grid, tacmap::pose_odometry_gaussian({.sigma_mm = 0.4}),
-                               model_t(tacmap::classic_sift{}, map64(), grid));
-  double theta = 1.0, cx = 31.0, cy = 30.0;
-  const auto touch = [&] { return pose_test::render(map64(), cx, cy, theta, grid.window_size()); };
-  tracked.update(touch());
-  tracked.update(touch());
+  walking_sensor sensor;
+  auto tracked = sensor.localized_filter();
   auto full = tracked;
   tracked.set_tracking({.epsilon = 1e-6});
   int windowed = 0;
   for (int step = 0; step < 8; ++step) {
     CAPTURE(step);
-    const double du = step % 2 == 0 ? 2.0 : -1.0;
-    const double dv = step % 3 == 0 ? 1.0 : -2.0;
-    const double dtheta = step == 3 ? 0.5 * grid.angle_step_rad() : 0.0;
-    cx += std::cos(theta) * du - std::sin(theta) * dv;
-    cy += std::sin(theta) * du + std::cos(theta) * dv;
-    theta += dtheta;
-    const tacmap::sensor_odometry u{.du_mm = du * mm, .dv_mm = dv * mm, .dtheta_rad = dtheta};
+    const tacmap::sensor_odometry u = sensor.walk(step, 0.5 * sensor.grid.angle_step_rad());
     auto reference = tracked;
     reference.set_tracking({});  // forgets the support box: the whole grid moves
     reference.predict(u);
@@ -285,7 +291,7 @@ TEST_CASE("a tracked pose filter's windowed predicts stay within their bound of 
       CHECK(tv_predict == 0.0);
     }
     full.predict(u);
-    const auto z = touch();
+    const auto z = sensor.touch();
     tracked.update(z);
     full.update(z);
     CHECK(tracked.estimate().map_index == full.estimate().map_index);

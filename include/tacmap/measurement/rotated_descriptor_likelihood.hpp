@@ -786,18 +786,7 @@ class rotated_descriptor_likelihood {
     // The distances on those tiles (merged), the same kernel as distances().
     for (Eigen::Index k = 0; k < columns; ++k) {
       auto& ranges = need[static_cast<std::size_t>(k)];
-      std::sort(ranges.begin(), ranges.end(),
-                [](const detail::tile_range& x, const detail::tile_range& y) {
-                  return x.begin < y.begin;
-                });
-      std::size_t kept = 0;
-      for (std::size_t i = 0; i < ranges.size(); ++i) {
-        if (kept > 0 && ranges[i].begin <= ranges[kept - 1].end)
-          ranges[kept - 1].end = std::max(ranges[kept - 1].end, ranges[i].end);
-        else
-          ranges[kept++] = ranges[i];
-      }
-      ranges.resize(kept);
+      detail::sort_and_merge(ranges);
       scalar_type* column = field_buffer_.data() + k * field_buffer_.rows();
       for (const detail::tile_range& t : ranges) {
         if (summed) {

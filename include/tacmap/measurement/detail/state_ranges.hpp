@@ -34,6 +34,22 @@ inline state_range tile_positions(const tile_range& t, Eigen::Index width, Eigen
   return {t.begin * width, std::min(t.end * width, n)};
 }
 
+/// Sorts half-open ranges (anything with `begin` and `end`: state_range, tile_range) by their
+/// start and merges those that overlap or touch, in place.
+template <class Range>
+void sort_and_merge(std::vector<Range>& ranges) {
+  std::sort(ranges.begin(), ranges.end(),
+            [](const Range& a, const Range& c) { return a.begin < c.begin; });
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < ranges.size(); ++i) {
+    if (kept > 0 && ranges[i].begin <= ranges[kept - 1].end)
+      ranges[kept - 1].end = std::max(ranges[kept - 1].end, ranges[i].end);
+    else
+      ranges[kept++] = ranges[i];
+  }
+  ranges.resize(kept);
+}
+
 /// The union over `blocks` blocks of `size` states of `states` (ranges of the whole latent
 /// grid, sorted, disjoint) taken modulo `size`: the base grid's states any block needs, sorted
 /// and merged, into `out` (the latent models compute every hypothesis on them in one pass).
@@ -49,16 +65,7 @@ inline void project_to_block(std::span<const state_range> states, Eigen::Index s
       b = e;
     }
   }
-  std::sort(out.begin(), out.end(),
-            [](const state_range& a, const state_range& c) { return a.begin < c.begin; });
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    if (kept > 0 && out[i].begin <= out[kept - 1].end)
-      out[kept - 1].end = std::max(out[kept - 1].end, out[i].end);
-    else
-      out[kept++] = out[i];
-  }
-  out.resize(kept);
+  sort_and_merge(out);
 }
 
 /// The states of block `h` (of `size`) in `states`, shifted to the block's own indices.
