@@ -44,8 +44,10 @@ if(TACMAP_BUILD_PRECOMPILED)
   set_source_files_properties(src/simd_avx2.cpp PROPERTIES COMPILE_OPTIONS "-mavx2;-mfma")
   # Optimised in Debug builds too: it holds the hot kernels and the heavy members of the common
   # filters (a map's per-window descriptors take about a minute at -O0), and tacmap's own tools,
-  # Python module and examples link it in every build.
-  target_compile_options(tacmap_precompiled PRIVATE $<$<CONFIG:Debug>:-O2>)
+  # Python module and examples link it in every build. There and in the other targets optimised
+  # in Debug builds, -g1 (line tables, for backtraces): full debug information of optimised
+  # template code is a third of their compile time and debugs poorly anyway.
+  target_compile_options(tacmap_precompiled PRIVATE "$<$<CONFIG:Debug>:-O2;-g1>")
   # Our own strict warnings, never exported (tacmap_dev_flags exists in top-level builds).
   target_link_libraries(tacmap_precompiled
     PRIVATE "$<BUILD_INTERFACE:$<$<TARGET_EXISTS:tacmap_dev_flags>:tacmap_dev_flags>>")

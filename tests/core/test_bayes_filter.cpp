@@ -11,6 +11,8 @@
 #include "tacmap/tacmap.hpp"
 #include "test_support.hpp"
 
+namespace test_bayes_filter {
+
 using tacmap_test::message_of;
 
 namespace {
@@ -267,3 +269,5 @@ TEST_CASE("toy localization on a small 2-D map converges to the true state") {
   CHECK(e.entropy_nats < 2.0);
   CHECK((e.mean_mm - grid.state_mm(grid.index(truth))).norm() < 1.0);
 }
+
+}  // namespace test_bayes_filter

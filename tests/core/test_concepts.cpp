@@ -4,6 +4,8 @@
 
 #include "tacmap/tacmap.hpp"
 
+namespace test_concepts {
+
 namespace {
 
 using tacmap::belief_array;
@@ -166,12 +168,17 @@ static_assert(!tacmap::descriptor<descriptor_wrong_field>);
 
 // Whole-template instantiation: every member of the filter compiles for float and double.
 }  // namespace
+}  // namespace test_concepts
 
+// Explicit instantiations belong to a namespace enclosing tacmap's.
 template class tacmap::bayes_filter<tacmap::planar_grid<float>, tacmap::odometry_gaussian,
-                                    uninformative>;
+                                    test_concepts::uninformative>;
 template class tacmap::bayes_filter<tacmap::planar_grid<double>, tacmap::odometry_gaussian,
-                                    uninformative>;
-template class tacmap::bayes_filter<corridor, stay_put, uninformative>;
+                                    test_concepts::uninformative>;
+template class tacmap::bayes_filter<test_concepts::corridor, test_concepts::stay_put,
+                                    test_concepts::uninformative>;
+
+namespace test_concepts {
 
 TEST_CASE("the minimal conforming descriptor from the concept's documentation works") {
   tacmap::image<float> img = tacmap::image<float>::Zero(5, 6);
@@ -192,3 +199,5 @@ TEST_CASE("a filter over the minimal grid and models runs and stays normalised")
   CHECK(filter.belief().sum() == doctest::Approx(1.0));
   CHECK(filter.estimate().mean_mm(0) == doctest::Approx(22.5));  // uniform over 0, 5, ..., 45
 }
+
+}  // namespace test_concepts

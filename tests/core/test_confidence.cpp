@@ -12,6 +12,8 @@
 #include "tacmap/tacmap.hpp"
 #include "test_support.hpp"
 
+namespace test_confidence {
+
 using tacmap_test::message_of;
 using filter_t = tacmap_test::table_filter;
 using grid_t = tacmap_test::table_grid;
@@ -232,3 +234,5 @@ TEST_CASE("most_probable_disc's mass is probability_within of its centre, for an
     }
   }
 }
+
+}  // namespace test_confidence

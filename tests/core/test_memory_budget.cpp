@@ -9,6 +9,8 @@
 
 #include "tacmap/detail/memory_budget.hpp"
 
+namespace test_memory_budget {
+
 TEST_CASE("check_memory refuses more than is available, naming both figures and the advice") {
   using tacmap::detail::check_memory;
   const std::uint64_t gb = 1000ULL * 1000ULL * 1000ULL;
@@ -53,3 +55,5 @@ TEST_CASE("available_memory_bytes reads a positive figure on Linux") {
   CHECK(*available > 0);
 #endif
 }
+
+}  // namespace test_memory_budget

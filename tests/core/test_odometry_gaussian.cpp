@@ -12,6 +12,8 @@
 #include "tacmap/motion/odometry_gaussian.hpp"
 #include "test_support.hpp"
 
+namespace test_odometry_gaussian {
+
 using tacmap::odometry;
 using tacmap::odometry_gaussian;
 using grid_t = tacmap::planar_grid<double>;
@@ -332,3 +334,5 @@ TEST_CASE("with off_grid::clamp in float, a small edge pile beside a large mass 
     CHECK(static_cast<double>(out(g.index({5, c}))) == doctest::Approx(1e-7 / total).epsilon(1e-3));
   }
 }
+
+}  // namespace test_odometry_gaussian

@@ -6,6 +6,8 @@
 #include "tacmap/grid/planar_grid.hpp"
 #include "test_support.hpp"
 
+namespace test_planar_grid {
+
 using tacmap::grid_cell;
 using tacmap::planar_grid;
 
@@ -73,3 +75,5 @@ TEST_CASE("bad grid configurations are rejected with messages naming the value")
           planar_grid<float>({.width = 120, .height = 120}, 1.0, {.width = 0, .height = 42});
         }).find("window = 0 x 42") != std::string::npos);
 }
+
+}  // namespace test_planar_grid

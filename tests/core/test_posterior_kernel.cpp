@@ -8,6 +8,8 @@
 
 #include "tacmap/filter/detail/posterior_kernel.hpp"
 
+namespace test_posterior_kernel {
+
 namespace {
 
 template <class T>
@@ -73,3 +75,5 @@ TEST_CASE_TEMPLATE("scan_log_likelihood finds the first NaN in the vector body a
     }
   }
 }
+
+}  // namespace test_posterior_kernel

@@ -10,6 +10,8 @@
 #include "tacmap/tacmap.hpp"
 #include "test_support.hpp"
 
+namespace test_robust_motion {
+
 using tacmap_test::message_of;
 
 namespace {
@@ -208,3 +210,5 @@ TEST_CASE("robust_motion: on a latent pose grid the wide component blurs every h
   CHECK(static_cast<double>(got.head(plane).sum()) ==
         doctest::Approx(static_cast<double>(in.head(plane).sum())).epsilon(0.05));
 }
+
+}  // namespace test_robust_motion

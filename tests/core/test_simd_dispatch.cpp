@@ -19,6 +19,8 @@
 #include "tacmap/motion/odometry_gaussian.hpp"
 #include "tacmap/simd.hpp"
 
+namespace test_simd_dispatch {
+
 static_assert(TACMAP_PRECOMPILED, "this test links tacmap::precompiled");
 
 namespace {
@@ -265,3 +267,5 @@ TEST_CASE("a precompiled SIFT-lite planar filter (extern template) localizes a t
   CHECK(grid.cell(e.map_index).row == 9);
   CHECK(grid.cell(e.map_index).col == 23);
 }
+
+}  // namespace test_simd_dispatch

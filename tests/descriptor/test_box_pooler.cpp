@@ -15,6 +15,8 @@
 #include "tacmap/descriptor/dense_sift.hpp"
 #include "tacmap/descriptor/detail/dense_sift_kernels.hpp"
 
+namespace test_box_pooler {
+
 namespace {
 
 using tacmap::dense_sift;
@@ -190,3 +192,5 @@ TEST_CASE("compute and sample pool small images as the per-tap path does, from o
   SUBCASE("sift_lite") { check_small_images<2>(tacmap::sift_lite::default_params()); }
   SUBCASE("classic_sift") { check_small_images<4>(tacmap::classic_sift::default_params()); }
 }
+
+}  // namespace test_box_pooler

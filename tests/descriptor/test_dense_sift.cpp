@@ -15,6 +15,8 @@
 #include "dense_sift_reference.hpp"
 #include "tacmap/descriptor/dense_sift.hpp"
 
+namespace test_dense_sift {
+
 namespace {
 
 using tacmap::classic_sift;
@@ -797,3 +799,5 @@ TEST_CASE(
   check(classic_sift{}, float{});
   check(dense_sift<2, 8, double>{}, double{});
 }
+
+}  // namespace test_dense_sift

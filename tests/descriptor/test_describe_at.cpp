@@ -14,6 +14,8 @@
 #include "tacmap/descriptor/dense_sift.hpp"
 #include "test_support.hpp"
 
+namespace test_describe_at {
+
 namespace {
 
 using tacmap::dense_sift;
@@ -249,3 +251,5 @@ TEST_CASE("describe_at rejects non-finite images like compute") {
   img(30, 7) = std::numeric_limits<float>::infinity();
   CHECK(message_of([&] { (void)d.describe_at(img, positions); }) != "no exception");
 }
+
+}  // namespace test_describe_at

@@ -22,6 +22,8 @@
 #include "tacmap/measurement/detail/distance_kernel.hpp"
 #include "test_support.hpp"
 
+namespace test_describe_windows {
+
 namespace {
 
 using tacmap::dense_sift;
@@ -308,3 +310,5 @@ TEST_CASE("descriptor_tiles::set_columns (packet transposes) equals its scalar r
     }
   }
 }
+
+}  // namespace test_describe_windows

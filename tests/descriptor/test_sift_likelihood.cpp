@@ -6,6 +6,8 @@
 #include "tacmap/descriptor/dense_sift.hpp"
 #include "tacmap/testing/conformance.hpp"
 
+namespace test_sift_likelihood {
+
 TEST_CASE_TEMPLATE_INVOKE(tacmap_descriptor_conformance, tacmap::sift_lite, tacmap::classic_sift);
 
 static_assert(tacmap::euclidean_descriptor<tacmap::sift_lite>);
@@ -53,3 +55,5 @@ TEST_CASE_TEMPLATE("tactile descriptors: the sampled path equals the dense field
     }
   }
 }
+
+}  // namespace test_sift_likelihood

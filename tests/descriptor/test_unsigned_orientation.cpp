@@ -14,6 +14,8 @@
 #include "tacmap/measurement/rotated_descriptor_likelihood.hpp"
 #include "tacmap/testing/conformance.hpp"
 
+namespace test_unsigned_orientation {
+
 namespace {
 
 using tacmap::classic_sift;
@@ -186,3 +188,5 @@ TEST_CASE("descriptor_likelihood with unsigned SIFT-lite finds a touch cut from 
   CAPTURE(tried);
   CHECK(first == tried);
 }
+
+}  // namespace test_unsigned_orientation

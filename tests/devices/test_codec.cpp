@@ -9,6 +9,8 @@
 
 #include "tacmap/devices/weiss/codec.hpp"
 
+namespace test_codec {
+
 namespace w = tacmap::weiss;
 using bytes = std::vector<std::uint8_t>;
 
@@ -321,3 +323,5 @@ TEST_CASE("make_tactile_frame: one matrix out of a multi-matrix frame, rows = re
   CHECK_NOTHROW(second.validate());
   CHECK_THROWS_AS(w::make_tactile_frame(fp, m, w::cell_order::x_fastest, 7), w::protocol_error);
 }
+
+}  // namespace test_codec

@@ -7,6 +7,8 @@
 #include "tacmap/devices/weiss/dsacon32m.hpp"
 #include "weiss_test_support.hpp"
 
+namespace test_dsacon32m_device {
+
 using namespace weiss_test;
 
 namespace {
@@ -177,3 +179,5 @@ TEST_CASE("dsacon32m: stall then disconnect, reconnect() goes through power-up a
   CHECK(missing_frames(after) == 0);
   CHECK(emu.error().empty());
 }
+
+}  // namespace test_dsacon32m_device

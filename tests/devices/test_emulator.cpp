@@ -9,6 +9,8 @@
 #include "tacmap/devices/weiss/wts.hpp"
 #include "weiss_test_support.hpp"
 
+namespace test_emulator {
+
 using namespace weiss_test;
 
 TEST_CASE("emulator: a stable symlink to a pty, removed on destruction") {
@@ -61,3 +63,5 @@ TEST_CASE("emulator: a broken render callback is reported, and the host times ou
   for (int i = 0; i < 100 && emu.error().empty(); ++i) std::this_thread::sleep_for(5ms);
   CHECK(emu.error().find("render returned 5 cells") != std::string::npos);
 }
+
+}  // namespace test_emulator

@@ -8,6 +8,8 @@
 
 #include "tacmap/devices/weiss/codec.hpp"
 
+namespace test_parser {
+
 namespace w = tacmap::weiss;
 using bytes = std::vector<std::uint8_t>;
 
@@ -246,3 +248,5 @@ TEST_CASE("parser: preamble runs longer than three, the DSACON32m banner, queue 
   CHECK_THROWS_AS(w::packet_parser(family, {.max_payload = 10, .max_queued_frames = 0}),
                   std::invalid_argument);
 }
+
+}  // namespace test_parser

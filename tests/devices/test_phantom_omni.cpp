@@ -16,6 +16,8 @@
 
 #include "tacmap/devices/phantom_omni.hpp"
 
+namespace test_phantom_omni {
+
 namespace {
 
 namespace hd = tacmap::hd;
@@ -441,3 +443,5 @@ TEST_CASE("hd::error_name covers the documented codes") {
   CHECK(hd::error_name(0x0600) == "HD_INVALID_LICENSE");
   CHECK(hd::error_name(0x0777) == "unknown HD error");
 }
+
+}  // namespace test_phantom_omni

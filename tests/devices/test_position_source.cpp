@@ -12,6 +12,8 @@
 #include "tacmap/io/session_log.hpp"
 #include "tacmap/tacmap.hpp"
 
+namespace test_position_source {
+
 namespace {
 
 using namespace std::chrono_literals;
@@ -254,3 +256,5 @@ TEST_CASE("wrap_angle keeps angles in the half-open interval from -pi to pi") {
   CHECK(wrap_angle(40.0) > -pi);
   CHECK(wrap_angle(40.0) <= pi);
 }
+
+}  // namespace test_position_source

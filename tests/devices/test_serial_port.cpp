@@ -15,6 +15,8 @@
 
 #include "tacmap/devices/serial_port.hpp"
 
+namespace test_serial_port {
+
 using namespace std::chrono_literals;
 using clock_type = std::chrono::steady_clock;
 
@@ -140,3 +142,5 @@ TEST_CASE("serial_port: raw 8N1 on a pty, bounded reads, write-all, move-only") 
                        tacmap::device_error);
   CHECK_FALSE(moved.is_open());
 }
+
+}  // namespace test_serial_port

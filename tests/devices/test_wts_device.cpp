@@ -9,6 +9,8 @@
 #include "tacmap/devices/weiss/wts.hpp"
 #include "weiss_test_support.hpp"
 
+namespace test_wts_device {
+
 using namespace weiss_test;
 
 namespace {
@@ -259,3 +261,5 @@ TEST_CASE("wts: misuse and mismatches fail loudly and quickly") {
   w::wts_device moved = std::move(dev);
   CHECK_NOTHROW(moved.next_frame(500ms));
 }
+
+}  // namespace test_wts_device

@@ -20,6 +20,9 @@
 #include "tacmap/testing/conformance.hpp"
 #ifdef TACMAP_TEST_TBB
 #include "tacmap/executor/tbb_executor.hpp"
+
+namespace test_executor {
+
 #endif
 
 namespace {
@@ -241,3 +244,5 @@ TEST_CASE("bayes_filter::set_executor: the same belief bit for bit") {
   parallel.set_executor({});
   CHECK_FALSE(static_cast<bool>(parallel.measurement_model().executor()));
 }
+
+}  // namespace test_executor

@@ -18,6 +18,8 @@
 
 #include "tacmap/io/session_log.hpp"
 
+namespace test_session_log {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -538,3 +540,5 @@ TEST_CASE("session recorder: moves keep recording into the same file, and close 
     CHECK(contains(e.what(), "is a folder"));
   }
 }
+
+}  // namespace test_session_log

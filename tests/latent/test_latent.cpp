@@ -15,6 +15,8 @@
 #include "tacmap/tacmap.hpp"
 #include "test_support.hpp"
 
+namespace test_latent {
+
 using tacmap_test::message_of;
 
 namespace {
@@ -491,3 +493,5 @@ TEST_CASE("latent_motion: one block's mass leaves the grid, another's stays") {
   CHECK(report.mass_lost == doctest::Approx(0.3 + 0.7 * b_report.mass_lost).epsilon(1e-4));
   CHECK((out.tail(20) - b_out).abs().maxCoeff() < 1e-6F);
 }
+
+}  // namespace test_latent

@@ -16,6 +16,8 @@
 #include "tacmap/tacmap.hpp"
 #include "test_support.hpp"
 
+namespace test_library {
+
 using tacmap_test::message_of;
 
 namespace {
@@ -350,3 +352,5 @@ TEST_CASE("library of pose grids: object, position and heading; the heading on t
   CHECK(f.heading_probability_within(b.heading(1), 0.1) ==
         doctest::Approx(layer_b1 / (e_a + e_b)).epsilon(1e-5));
 }
+
+}  // namespace test_library

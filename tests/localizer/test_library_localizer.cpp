@@ -13,6 +13,8 @@
 #include "tacmap/sim/tactile_simulator.hpp"
 #include "test_support.hpp"
 
+namespace test_library_localizer {
+
 namespace {
 
 // SIFT-lite on the shared dense field: milliseconds to prepare a map, even unoptimised.
@@ -173,3 +175,5 @@ TEST_CASE("library_experiment: the library filter and the object's own filter on
           tacmap::library_experiment bad({{"gecko", &p}}, pose);
         }).find("known heading") != std::string::npos);
 }
+
+}  // namespace test_library_localizer

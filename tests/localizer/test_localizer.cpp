@@ -15,6 +15,8 @@
 #include "tacmap/sim/tactile_simulator.hpp"
 #include "test_support.hpp"
 
+namespace test_localizer {
+
 namespace {
 
 using tacmap_test::gecko;
@@ -297,3 +299,5 @@ TEST_CASE("localizer_config::patch_spacing reaches the descriptor model and is c
           tacmap::localizer bad(p.map, p.mm_per_px, config);
         }).find("spacing = 0") != std::string::npos);
 }
+
+}  // namespace test_localizer

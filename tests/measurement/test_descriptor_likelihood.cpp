@@ -12,6 +12,8 @@
 #include "tacmap/measurement/descriptor_likelihood.hpp"
 #include "test_support.hpp"
 
+namespace test_descriptor_likelihood {
+
 using tacmap::descriptor_likelihood;
 using tacmap::descriptor_likelihood_params;
 using tacmap::likelihood_shape;
@@ -348,3 +350,5 @@ TEST_CASE("a map whose preparation cannot fit in memory is refused before alloca
     CHECK(m.find("shared_dense") != std::string::npos);
   }
 }
+
+}  // namespace test_descriptor_likelihood

@@ -8,6 +8,8 @@
 
 #include "tacmap/measurement/detail/distance_kernel.hpp"
 
+namespace test_distance_kernel {
+
 TEST_CASE_TEMPLATE("accumulate_distances matches its scalar reference", T, float, double) {
   std::mt19937 rng(21);
   for (const Eigen::Index positions : {1, 7, 8, 9, 31, 1000}) {
@@ -130,3 +132,5 @@ TEST_CASE("contrast_basis: distances kept, the permutation becomes a sign flip")
   CHECK(bad({0, 1}).find("element 0 maps to 0") != std::string::npos);
   CHECK(bad({1, 2, 0}).find("expected an involution") != std::string::npos);
 }
+
+}  // namespace test_distance_kernel

@@ -10,6 +10,8 @@
 #include "tacmap/motion/odometry_gaussian.hpp"
 #include "test_support.hpp"
 
+namespace test_ncc_likelihood {
+
 namespace {
 
 tacmap::image<float> random_map(Eigen::Index rows, Eigen::Index cols, unsigned seed) {
@@ -119,3 +121,5 @@ TEST_CASE("the NCC model localizes a noiseless touch sequence in the filter") {
   }
   CHECK(filter.estimate().map_index == grid.index(truth));
 }
+
+}  // namespace test_ncc_likelihood

@@ -11,6 +11,8 @@
 #include "tacmap/measurement/detail/quantized_kernel.hpp"
 #include "tacmap/simd.hpp"
 
+namespace test_quantized_kernel {
+
 namespace {
 
 using tacmap::detail::quantized_query;
@@ -233,3 +235,5 @@ TEST_CASE("quantized_tiles::set_columns stores what quantize gives, element for 
   quantized_tiles refused(2, dim);
   CHECK_FALSE(refused.set_columns(0, negative));
 }
+
+}  // namespace test_quantized_kernel

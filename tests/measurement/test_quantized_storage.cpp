@@ -13,6 +13,8 @@
 #include "tacmap/measurement/descriptor_likelihood.hpp"
 #include "tacmap/measurement/detail/state_ranges.hpp"
 
+namespace test_quantized_storage {
+
 using tacmap::descriptor_likelihood;
 using tacmap::descriptor_likelihood_params;
 using tacmap::descriptor_storage;
@@ -187,3 +189,5 @@ TEST_CASE("int8 storage: where it does not apply, and what it refuses or clamps"
                                     {.spacing = 2, .storage = descriptor_storage::int8})
                   .stores_quantized());
 }
+
+}  // namespace test_quantized_storage

@@ -20,6 +20,8 @@
 #include "tacmap/testing/conformance.hpp"
 #include "test_support.hpp"
 
+namespace test_tracking {
+
 using grid_t = tacmap::planar_grid<float>;
 using tacmap::state_range;
 using tacmap::update_path;
@@ -429,3 +431,5 @@ TEST_CASE("a windowed predict stays within its bound of the whole grid's predict
   }
   CHECK(windowed >= 6);
 }
+
+}  // namespace test_tracking

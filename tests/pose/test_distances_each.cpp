@@ -7,6 +7,8 @@
 
 #include "tacmap/measurement/detail/distance_kernel.hpp"
 
+namespace test_distances_each {
+
 namespace {
 // The descriptors' squared norms, as distances_each takes them.
 template <class T>
@@ -231,3 +233,5 @@ TEST_CASE_TEMPLATE("add_row matches add_row_scalar", T, float, double) {
     CHECK(got == doctest::Approx(direct).epsilon(1e-5));
   }
 }
+
+}  // namespace test_distances_each

@@ -12,6 +12,8 @@
 #include "tacmap/measurement/rotated_descriptor_likelihood.hpp"
 #include "tacmap/motion/pose_odometry_gaussian.hpp"
 
+namespace test_pose_filter {
+
 static_assert(tacmap::has_circular_coordinates<tacmap::pose_grid<float>>);
 static_assert(!tacmap::has_circular_coordinates<tacmap::planar_grid<float>>);
 static_assert(tacmap::motion_model<tacmap::pose_odometry_gaussian, tacmap::pose_grid<float>>);
@@ -180,3 +182,5 @@ TEST_CASE("pose filter: touches at an unknown heading localize position and head
   INFO("mass within 2.5 px and one heading step of the truth: ", near5);
   CHECK(near5 > 0.15);
 }
+
+}  // namespace test_pose_filter

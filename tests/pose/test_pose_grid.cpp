@@ -12,6 +12,8 @@
 #include "tacmap/grid/pose_grid.hpp"
 #include "test_support.hpp"
 
+namespace test_pose_grid {
+
 using tacmap_test::message_of;
 
 static_assert(tacmap::state_grid<tacmap::pose_grid<float>>);
@@ -257,3 +259,5 @@ TEST_CASE("pose_grid: wrap_angle maps onto -pi .. pi") {
     CHECK(std::remainder(w - t, 2 * pi) == doctest::Approx(0.0).epsilon(1e-12).scale(1.0));
   }
 }
+
+}  // namespace test_pose_grid

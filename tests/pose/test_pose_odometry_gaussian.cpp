@@ -13,6 +13,8 @@
 #include "tacmap/motion/pose_odometry_gaussian.hpp"
 #include "test_support.hpp"
 
+namespace test_pose_odometry_gaussian {
+
 using tacmap::pose_odometry_gaussian;
 using tacmap::sensor_odometry;
 using tacmap_test::message_of;
@@ -371,3 +373,5 @@ TEST_CASE("pose odometry: predict_box refuses, belief unchanged, where predict w
       m.predict_box(g, belief, {.row = 12, .col = 12, .rows = 4, .cols = 4}, {.dtheta_rad = 1e4}));
   CHECK((belief == before).all());
 }
+
+}  // namespace test_pose_odometry_gaussian

@@ -19,6 +19,8 @@
 #include "tacmap/motion/pose_odometry_gaussian.hpp"
 #include "tacmap/testing/conformance.hpp"
 
+namespace test_pose_tracking {
+
 using tacmap::state_range;
 using tacmap::update_path;
 using pose_grid_t = tacmap::pose_grid<float>;
@@ -302,3 +304,5 @@ TEST_CASE("a tracked pose filter's windowed predicts stay within their bound of 
   // the tolerance), after which the next predict moves the whole grid: 3 of 8 are windowed.
   CHECK(windowed >= 3);
 }
+
+}  // namespace test_pose_tracking

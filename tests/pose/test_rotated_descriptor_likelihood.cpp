@@ -18,6 +18,8 @@
 #include "tacmap/measurement/rotated_descriptor_likelihood.hpp"
 #include "test_support.hpp"
 
+namespace test_rotated_descriptor_likelihood {
+
 using tacmap::rotated_descriptor_likelihood;
 using tacmap::sift_lite;
 using tacmap_test::message_of;
@@ -475,3 +477,5 @@ TEST_CASE(
     CHECK(m.find("coarser map") != std::string::npos);
   }
 }
+
+}  // namespace test_rotated_descriptor_likelihood

@@ -16,6 +16,8 @@
 #include "tacmap/sim/protocol.hpp"
 #include "test_support.hpp"
 
+namespace test_calibration {
+
 using tacmap_test::message_of;
 using filter_t = tacmap_test::table_filter;
 
@@ -180,3 +182,5 @@ TEST_CASE("simulated gecko touches: the fit improves the log score and the claim
   CHECK(at_fit.probability.size() == fit.touches);
   CHECK(at_fit.said_and_right <= at_fit.said);
 }
+
+}  // namespace test_calibration

@@ -11,6 +11,8 @@
 #include "tacmap/sim/experiment.hpp"
 #include "tacmap/sim/protocol.hpp"
 
+namespace test_experiment {
+
 namespace {
 
 std::vector<tacmap::touch_record> records(std::initializer_list<double> errors) {
@@ -214,3 +216,5 @@ TEST_CASE("localization_experiment: a random polarity is drawn per sequence, rep
   CHECK(dark_experiment.relief_mm()(0, 0) > 3.9F);  // the map's corner is the dark base
   CHECK(experiment.relief_mm()(0, 0) < 0.1F);       // the bright variant: base at 0
 }
+
+}  // namespace test_experiment

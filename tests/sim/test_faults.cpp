@@ -13,6 +13,8 @@
 #include "tacmap/sim/protocol.hpp"
 #include "test_support.hpp"
 
+namespace test_faults {
+
 using tacmap_test::message_of;
 
 namespace {
@@ -152,3 +154,5 @@ TEST_CASE("experiment: odometry that carries the belief off the map restarts it,
   tacmap::localization_experiment robust(gecko(), config);
   for (const auto& t : robust.run(0).touches) CHECK_FALSE(t.lost_track);
 }
+
+}  // namespace test_faults

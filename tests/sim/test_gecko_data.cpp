@@ -17,6 +17,8 @@
 #include "tacmap/sim/tactile_simulator.hpp"
 #include "tacmap/tactile/preprocess.hpp"
 
+namespace test_gecko_data {
+
 namespace {
 
 const std::filesystem::path gecko_dir = std::filesystem::path(TACMAP_DATA_DIR) / "gecko";
@@ -167,3 +169,5 @@ TEST_CASE("simulated gecko touches pass preprocessing and look like the map at t
     }
   }
 }
+
+}  // namespace test_gecko_data

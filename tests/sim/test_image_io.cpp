@@ -15,6 +15,8 @@
 #include <stdexcept>
 #include <string>
 
+namespace test_image_io {
+
 using tacmap::image;
 
 using tacmap_test::message_of;
@@ -109,3 +111,5 @@ TEST_CASE("PNG output decodes with stb_image to the same pixels") {
     CHECK(same);
   }
 }
+
+}  // namespace test_image_io

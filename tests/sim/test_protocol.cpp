@@ -10,6 +10,8 @@
 #include "tacmap/sim/protocol.hpp"
 #include "test_support.hpp"
 
+namespace test_protocol {
+
 using tacmap_test::message_of;
 
 namespace {
@@ -191,3 +193,5 @@ TEST_CASE("manifest: a whole protocol loads; errors name the file, the line and 
       "locations = locations.txt\nsequences = sequences.txt\n",
       "locations.txt:2:", "field 'y_mm' = 50 puts the 47.6 mm tall sensor footprint");
 }
+
+}  // namespace test_protocol

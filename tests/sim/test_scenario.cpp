@@ -17,6 +17,8 @@
 #include "tacmap/sim/tactile_simulator.hpp"
 #include "test_support.hpp"
 
+namespace test_scenario {
+
 namespace {
 
 using tacmap_test::gecko;
@@ -463,3 +465,5 @@ TEST_CASE("localization_config::name shows tau when it is set") {
   CHECK(m.find("appearance_switch = 0.1 needs appearance = latent") != std::string::npos);
   CHECK(m.find("appearance = fixed") != std::string::npos);
 }
+
+}  // namespace test_scenario

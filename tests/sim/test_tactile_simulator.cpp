@@ -11,6 +11,8 @@
 #include "tacmap/tactile/preprocess.hpp"
 #include "test_support.hpp"
 
+namespace test_tactile_simulator {
+
 using tacmap::image;
 using tacmap::map_pose;
 using tacmap::simulator_params;
@@ -404,3 +406,5 @@ TEST_CASE("sim_rng: fixed streams and sane statistics") {
   for (int k = 0; k < 5000; ++k) ++counts[g.below(5)];
   for (const int k : counts) CHECK(std::abs(k - 1000) < 120);
 }
+
+}  // namespace test_tactile_simulator

@@ -8,6 +8,8 @@
 #include "tacmap/tactile/preprocess.hpp"
 #include "test_support.hpp"
 
+namespace test_preprocess {
+
 using tacmap::frame_rejection;
 using tacmap::preprocess;
 using tacmap::preprocess_params;
@@ -174,3 +176,5 @@ TEST_CASE("malformed frames and parameters raise errors naming the value") {
           (void)preprocess(paper_frame(), {.mm_per_px = 100.0});
         }).find("covers less than one pixel") != std::string::npos);
 }
+
+}  // namespace test_preprocess
