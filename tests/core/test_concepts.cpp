@@ -166,11 +166,11 @@ static_assert(!tacmap::descriptor<descriptor_no_distance>);
 static_assert(!tacmap::descriptor<descriptor_int_dimension>);
 static_assert(!tacmap::descriptor<descriptor_wrong_field>);
 
-// Whole-template instantiation: every member of the filter compiles for float and double.
 }  // namespace
 }  // namespace test_concepts
 
-// Explicit instantiations belong to a namespace enclosing tacmap's.
+// Whole-template instantiation: every member of the filter compiles for float and double. (At
+// global scope: an explicit instantiation belongs to a namespace enclosing tacmap's.)
 template class tacmap::bayes_filter<tacmap::planar_grid<float>, tacmap::odometry_gaussian,
                                     test_concepts::uninformative>;
 template class tacmap::bayes_filter<tacmap::planar_grid<double>, tacmap::odometry_gaussian,
