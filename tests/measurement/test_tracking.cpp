@@ -357,7 +357,7 @@ TEST_CASE("tracking refuses bad parameters and keeps the NaN and infinity guards
   CHECK(f.estimate().map_index == inside);
 }
 
-TEST_CASE("predict_box moves a box's mass as predict moves it, and refuses near the edge") {
+TEST_CASE("predict_box moves a box's mass as predict moves it, and drops what leaves the grid") {
   const grid_t grid = test_grid();
   const tacmap::grid_box box{.row = 30, .col = 35, .rows = 9, .cols = 7};
   // Mass only inside the box: the windowed prediction is then the whole grid's.
@@ -379,13 +379,54 @@ TEST_CASE("predict_box moves a box's mass as predict moves it, and refuses near 
       CHECK((windowed - whole).abs().maxCoeff() <= 1e-6F * whole.maxCoeff());
       CHECK(static_cast<double>(windowed.sum()) == doctest::Approx(1.0).epsilon(1e-6));
     }
-    // The moved mass would reach the edge, where predict drops or clamps it: refused, unchanged.
+    // Moved past the edge: predict drops that mass and renormalises; predict_boxes drops it
+    // and reports it (its belief is predict's times 1 - dropped). With off_grid::clamp (mass
+    // piled onto the edge) it refuses, the belief unchanged; so it does for NaN odometry.
+    const tacmap::odometry off{-7.0, 0.0};
+    tacmap::prediction_report report;
+    Eigen::ArrayXf whole(p.size());
+    report = motion.predict(grid, p, whole, off);
+    REQUIRE(report.mass_lost > 1e-3);
     Eigen::ArrayXf at_edge = p;
-    CHECK_FALSE(motion.predict_box(grid, at_edge, {.row = 1, .col = 35, .rows = 4, .cols = 4},
-                                   tacmap::odometry{0.0, -0.2}));
-    CHECK_FALSE(motion.predict_box(grid, at_edge, box, tacmap::odometry{-7.0, 0.0}));
+    std::vector<tacmap::grid_box> landed;
+    double dropped = 0.0;
+    REQUIRE(motion.predict_boxes(grid, at_edge, std::span<const tacmap::grid_box>(&box, 1), off,
+                                 landed, dropped));
+    CHECK(dropped == doctest::Approx(report.mass_lost).epsilon(1e-5));
+    CHECK((at_edge - whole * static_cast<float>(1.0 - dropped)).abs().maxCoeff() <=
+          1e-6F * whole.maxCoeff());
+    REQUIRE(landed.size() == 1);
+    CHECK(landed[0].col == 0);
+    at_edge = p;
+    const tacmap::odometry_gaussian clamped({.sigma_mm = 0.5, .k = k,
+                                             .boundary = tacmap::off_grid::clamp});
+    CHECK_FALSE(clamped.predict_box(grid, at_edge, box, off));
     CHECK_FALSE(motion.predict_box(grid, at_edge, box, tacmap::odometry{std::nan(""), 0.0}));
     CHECK((at_edge == p).all());
+  }
+  {
+    // Two boxes whose moved windows overlap the other box: every box is read before any window
+    // is added, so the result is predict's.
+    const std::vector<tacmap::grid_box> two{{.row = 20, .col = 20, .rows = 5, .cols = 4},
+                                            {.row = 22, .col = 25, .rows = 4, .cols = 6}};
+    Eigen::ArrayXf q = Eigen::ArrayXf::Zero(p.size());
+    Eigen::Map<tacmap::image<float>> qi(q.data(), grid.rows(), grid.cols());
+    for (const tacmap::grid_box& b : two)
+      for (Eigen::Index r = b.row; r < b.row + b.rows; ++r)
+        for (Eigen::Index c = b.col; c < b.col + b.cols; ++c)
+          qi(r, c) = 1.0F + static_cast<float>((r * 3 + c) % 7);
+    q /= q.sum();
+    const tacmap::odometry_gaussian motion({.sigma_mm = 0.5, .k = 8});
+    const tacmap::odometry u{0.9, -0.3};
+    Eigen::ArrayXf whole(q.size()), windowed = q;
+    motion.predict(grid, q, whole, u);
+    std::vector<tacmap::grid_box> landed;
+    double dropped = -1.0;
+    REQUIRE(motion.predict_boxes(grid, windowed, std::span<const tacmap::grid_box>(two), u,
+                                 landed, dropped));
+    CHECK(dropped == 0.0);
+    CHECK((windowed - whole).abs().maxCoeff() <= 1e-6F * whole.maxCoeff());
+    CHECK(landed.size() == 2);
   }
   static_assert(tacmap::moves_box<tacmap::odometry_gaussian, grid_t>);
 }
@@ -430,6 +471,66 @@ TEST_CASE("a windowed predict stays within its bound of the whole grid's predict
     CHECK(total_variation(tracked.belief(), full.belief()) <= 1e-2);
   }
   CHECK(windowed >= 6);
+}
+
+TEST_CASE("two clusters far apart are tracked in boxes of their own, within the bound") {
+  // A belief on two places of the map (a repeated texture): their bounding box is wider than
+  // max_support of the grid, so only boxes of their own keep the predicts windowed and the
+  // updates searching the region. The table favours both places alike, so both stay.
+  const grid_t grid = test_grid();
+  const Eigen::Index n = grid.size();
+  const tacmap::grid_cell a{12, 12}, b{42, 55};
+  REQUIRE(static_cast<double>((b.row - a.row + 1) * (b.col - a.col + 1)) >
+          0.25 * static_cast<double>(n));
+  Eigen::ArrayXf prior = blob(grid, a, 1.5) + blob(grid, b, 1.5);
+  table_model::measurement_type z{Eigen::ArrayXf(n), 0.0};
+  tacmap::bayes_filter tracked(grid, tacmap::odometry_gaussian({.sigma_mm = 0.3, .k = 8}),
+                               table_model{});
+  tracked.set_prior(prior);
+  auto full = tracked;
+  tracked.set_tracking({.epsilon = 1e-6});
+  int windowed = 0, tracked_updates = 0;
+  double dx = 0.0;
+  for (int step = 0; step < 16; ++step) {
+    CAPTURE(step);
+    const double move = step % 2 == 0 ? 0.6 : -0.6;  // mm: 3 px right, then back
+    dx += move;
+    const tacmap::odometry u{.dx_mm = move, .dy_mm = 0.0};
+    // The table peaks where the two places now are.
+    const auto shift = static_cast<Eigen::Index>(std::lround(dx / mm_per_px));
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const auto c = grid.cell(i);
+      const auto d2 = [&](const tacmap::grid_cell& p) {
+        const double dr = static_cast<double>(c.row - p.row);
+        const double dc = static_cast<double>(c.col - p.col - shift);
+        return dr * dr + dc * dc;
+      };
+      z.ll(i) = static_cast<float>(-0.5 * std::min(d2(a), d2(b)));
+    }
+    const tacmap::prediction_report pr = tracked.predict(u);
+    full.predict(u);
+    if (pr.windowed) {
+      ++windowed;
+      CHECK(pr.tracking_error_bound <= 1e-6 * (1.0 + 1e-4));
+    }
+    const tacmap::update_report rt = tracked.update(z);
+    full.update(z);
+    if (rt.path == update_path::tracked) {
+      ++tracked_updates;
+      CHECK(rt.evaluated_states < n / 4);
+    }
+    // The two bounds of the step (predict and update), plus float rounding.
+    CHECK(total_variation(tracked.belief(), full.belief()) <=
+          pr.tracking_error_bound + rt.tracking_error_bound + 1e-5);
+    CHECK(static_cast<double>(tracked.belief().sum()) == doctest::Approx(1.0).epsilon(1e-5));
+    // Both places keep their share.
+    const Eigen::Map<const tacmap::image<float>> img(tracked.belief().data(), grid.rows(),
+                                                     grid.cols());
+    CHECK(static_cast<double>(img.block(0, 0, grid.rows(), 34).sum()) ==
+          doctest::Approx(0.5).epsilon(0.05));
+  }
+  CHECK(windowed >= 12);
+  CHECK(tracked_updates >= 12);
 }
 
 }  // namespace test_tracking

@@ -5,8 +5,10 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <span>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "tacmap/grid/pose_grid.hpp"
 #include "tacmap/motion/odometry_gaussian.hpp"
@@ -358,20 +360,82 @@ TEST_CASE("pose odometry: predict_box moves a box's mass in every layer as predi
   CHECK((bf.cast<double>() - expected).abs().maxCoeff() <= 1e-6);
 }
 
-TEST_CASE("pose odometry: predict_box refuses, belief unchanged, where predict would lose mass") {
+TEST_CASE("pose odometry: predict_boxes moves several boxes at once, overlapping windows too") {
+  // Mass in two boxes close enough that one's moved window covers the other: every box is read
+  // before any window is added, so the result is predict's, and `landed` holds each window.
+  const auto g = grid<double>(12);
+  const pose_odometry_gaussian m({.sigma_mm = 1.0, .sigma_rad = 0.3});
+  const std::vector<tacmap::grid_box> boxes{{.row = 10, .col = 8, .rows = 4, .cols = 5},
+                                            {.row = 10, .col = 14, .rows = 5, .cols = 3}};
+  Eigen::ArrayXd inside = Eigen::ArrayXd::Zero(g.size());
+  unsigned seed = 3;
+  for (Eigen::Index a : {0, 3, 7})
+    for (const tacmap::grid_box& box : boxes)
+      for (Eigen::Index r = box.row; r < box.row + box.rows; ++r)
+        for (Eigen::Index c = box.col; c < box.col + box.cols; ++c) {
+          seed = seed * 1103515245U + 12345U;
+          inside(g.index(a, {r, c})) = 0.1 + static_cast<double>(seed % 1000U) / 1000.0;
+        }
+  inside /= inside.sum();
+  const sensor_odometry u{.du_mm = 3.4 * mm_per_px, .dv_mm = 0.7 * mm_per_px, .dtheta_rad = -0.4};
+  const Eigen::ArrayXd expected = predict(m, g, inside, u, nullptr);
+  Eigen::ArrayXd belief = inside;
+  std::vector<tacmap::grid_box> landed;
+  double dropped = -1.0;
+  REQUIRE(m.predict_boxes(g, belief, std::span<const tacmap::grid_box>(boxes), u, landed,
+                          dropped));
+  CHECK(dropped == 0.0);
+  CHECK((belief - expected).abs().maxCoeff() <= 1e-12);
+  REQUIRE(landed.size() == 2);
+  // Every state with mass lies in some landed window, in every layer.
+  for (Eigen::Index i = 0; i < g.size(); ++i) {
+    if (!(belief(i) > 0.0)) continue;
+    const tacmap::grid_cell c = g.cell(i);
+    bool in = false;
+    for (const tacmap::grid_box& w : landed)
+      in = in || (c.row >= w.row && c.row < w.row + w.rows && c.col >= w.col &&
+                  c.col < w.col + w.cols);
+    CHECK(in);
+  }
+}
+
+TEST_CASE("pose odometry: predict_box drops what leaves the grid, or refuses (clamp, bad input)") {
   const auto g = grid<double>(8);
-  const pose_odometry_gaussian m;
   const tacmap::grid_box box{.row = 2, .col = 20, .rows = 4, .cols = 4};
-  Eigen::ArrayXd belief = Eigen::ArrayXd::Constant(g.size(), 1.0 / static_cast<double>(g.size()));
-  const Eigen::ArrayXd before = belief;
-  // Layer 0 moves +x, layer 2 (90 deg) +y: some layer's window leaves the grid.
-  CHECK_FALSE(m.predict_box(g, belief, box, {.du_mm = 5.0 * mm_per_px}));
-  CHECK((belief == before).all());
+  // Mass only in the box, near the edge: layer 0 moves +x, layer 2 (90 deg) +y, so some
+  // layers' windows leave the grid. predict drops that mass and renormalises; predict_boxes
+  // drops it and reports it: its belief is predict's times (1 - dropped).
+  Eigen::ArrayXd inside = Eigen::ArrayXd::Zero(g.size());
+  for (Eigen::Index a = 0; a < 8; ++a)
+    for (Eigen::Index r = box.row; r < box.row + box.rows; ++r)
+      for (Eigen::Index c = box.col; c < box.col + box.cols; ++c)
+        inside(g.index(a, {r, c})) = 1.0 + static_cast<double>((r + 2 * c + 3 * a) % 5);
+  inside /= inside.sum();
+  const sensor_odometry u{.du_mm = 5.0 * mm_per_px};
+  const pose_odometry_gaussian m;
+  tacmap::prediction_report report;
+  const Eigen::ArrayXd expected = predict(m, g, inside, u, &report);
+  REQUIRE(report.mass_lost > 1e-3);
+  Eigen::ArrayXd belief = inside;
+  std::vector<tacmap::grid_box> landed;
+  double dropped = 0.0;
+  REQUIRE(m.predict_boxes(g, belief, std::span<const tacmap::grid_box>(&box, 1), u, landed,
+                          dropped));
+  CHECK(dropped == doctest::Approx(report.mass_lost).epsilon(1e-9));
+  CHECK((belief - expected * (1.0 - dropped)).abs().maxCoeff() <= 1e-12);
+  REQUIRE(landed.size() == 1);
+  CHECK(landed[0].row >= 0);
+  CHECK(landed[0].col + landed[0].cols <= g.cols());
+  // With off_grid::clamp (mass piled on the edge) the box is refused, the belief unchanged.
+  const pose_odometry_gaussian clamped({.boundary = tacmap::off_grid::clamp});
+  Eigen::ArrayXd kept = inside;
+  CHECK_FALSE(clamped.predict_box(g, kept, box, u));
+  CHECK((kept == inside).all());
   CHECK_FALSE(
-      m.predict_box(g, belief, {.row = 12, .col = 12, .rows = 4, .cols = 4}, {.du_mm = nan_value}));
+      m.predict_box(g, kept, {.row = 12, .col = 12, .rows = 4, .cols = 4}, {.du_mm = nan_value}));
   CHECK_FALSE(
-      m.predict_box(g, belief, {.row = 12, .col = 12, .rows = 4, .cols = 4}, {.dtheta_rad = 1e4}));
-  CHECK((belief == before).all());
+      m.predict_box(g, kept, {.row = 12, .col = 12, .rows = 4, .cols = 4}, {.dtheta_rad = 1e4}));
+  CHECK((kept == inside).all());
 }
 
 }  // namespace test_pose_odometry_gaussian

@@ -53,8 +53,19 @@ struct rotated_likelihood_params {
   /// measured: gecko 81 of 88 sequences localized with 0.25, 81 with 0.5, 78 with 1.
   double tau = 0.15;
   double tempering = descriptor_likelihood_params{}.tempering;
+  /// A patch turned off the map counts its mean distance over the poses where it lands (file
+  /// comment). Maps of up to this many field positions (about 128 x 128 px) take that mean
+  /// exactly; larger ones over a fixed lattice of about `off_map_sample` field positions (every
+  /// s-th row and column), so that a tracked touch near the map's edge costs a few thousand
+  /// distances instead of a pass over the whole field.
+  Eigen::Index off_map_exact_positions = 16384;
+  Eigen::Index off_map_sample = 4096;  ///< positions of the lattice (about), >= 1
 
   void validate() const {
+    if (off_map_exact_positions < 0 || off_map_sample < 1)
+      detail::fail("rotated_likelihood_params: off_map_exact_positions = ",
+                   off_map_exact_positions, ", off_map_sample = ", off_map_sample,
+                   "; expected >= 0 and >= 1 (the defaults are 16384 and 4096)");
     descriptor_likelihood_params p;
     p.spacing = spacing;
     p.epsilon = epsilon;
@@ -136,6 +147,7 @@ class rotated_descriptor_likelihood {
     field_rows_ = field.rows;
     field_cols_ = field.cols;
     field_tiles_ = detail::descriptor_tiles<scalar_type>(field.values);
+    build_mean_sample(field);
     rows_ = map.rows() - window.height + 1;
     cols_ = map.cols() - window.width + 1;
     build_headings(offsets);
@@ -237,12 +249,27 @@ class rotated_descriptor_likelihood {
     // distance over the states where it lands on the map (uninformative, neither favouring nor
     // excluding edge poses).
     const Eigen::Index plane = rows_ * cols_;
+    if (sampled_means()) {  // a large map: every patch's mean over the lattice sample
+      off_.assign(static_cast<std::size_t>(angles_ * m_count_), 0);
+      for (Eigen::Index a = 0; a < angles_; ++a)
+        for (Eigen::Index m = 0; m < m_count_; ++m)
+          off_[static_cast<std::size_t>(a * m_count_ + m)] = off_somewhere(a, m) ? 1 : 0;
+      norms_ = g_norms_;
+      sample_means([&](Eigen::Index a, Eigen::Index m) {
+        return summed ? a * m_count_ + m : m * angles_ + a;
+      });
+    }
     for (Eigen::Index a = 0; a < angles_; ++a) {
       Eigen::Map<image<scalar_type>> layer(out.data() + a * plane, rows_, cols_);
       const heading_tables& h = heading_[static_cast<std::size_t>(a)];
       for (Eigen::Index m = 0; m < m_count_; ++m) {
         const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
         if (r.rows <= 0 || r.cols <= 0) continue;  // never on the map: no information at all
+        if (sampled_means()) {
+          if (off_somewhere(a, m))
+            add_outside(layer, r, means_[static_cast<std::size_t>(a * m_count_ + m)]);
+          continue;
+        }
         const double total = sums_[static_cast<std::size_t>(a * m_count_ + m)];
         add_outside(layer, r,
                     static_cast<scalar_type>(total / static_cast<double>(r.rows * r.cols)));
@@ -327,7 +354,10 @@ class rotated_descriptor_likelihood {
       off_.assign(static_cast<std::size_t>(angles_ * m_count_), 0);
       for_each_heading(
           [&](Eigen::Index a, std::span<const row_segment> rows) { mark_off_map(a, rows); });
-      off_map_means(column);
+      if (sampled_means())
+        sample_means(column);
+      else
+        off_map_means(column);
       for_each_heading([&](Eigen::Index a, std::span<const row_segment> rows) {
         // The descriptors of heading a: all pairs one group (its M columns summed by the
         // kernel into S = sum_n D_n), aligned M single descriptors.
@@ -637,6 +667,110 @@ class rotated_descriptor_likelihood {
            col < r.first_col + r.cols;
   }
 
+  // --- Off-map means on large maps (issue 14, tracking at camera resolution) ---
+  // A patch off the map contributes its mean distance over the poses where it lands (file
+  // comment). On a map of more than `off_map_exact_positions` field positions that mean is
+  // taken over a fixed lattice of the field (every s-th row and column, s chosen for about
+  // `off_map_sample` of them) instead of every position, in the whole grid's pass and
+  // in the tracking hook alike: the hook then needs the distances of a few thousand positions,
+  // not a pass over the field (30 ms per tracked touch on 640 x 480 at 36 headings whenever a
+  // requested pose had a patch off the map). The value is an estimate of the same
+  // uninformative mean (distances vary by tens of percent over a map; the lattice's mean of
+  // 4,096 of them is within a percent or so), and maps up to about 128 x 128 px keep the exact
+  // mean.
+  [[nodiscard]] bool sampled_means() const {
+    if constexpr (!euclidean_descriptor<Descriptor>)
+      return false;
+    else
+      return sample_tiles_.positions() > 0;
+  }
+
+  void build_mean_sample(const descriptor_field<scalar_type>& field) {
+    const Eigen::Index positions = field.rows * field.cols;
+    if (!euclidean_descriptor<Descriptor> || positions <= params_.off_map_exact_positions) return;
+    const auto stride = std::max<Eigen::Index>(
+        1, static_cast<Eigen::Index>(std::ceil(std::sqrt(
+               static_cast<double>(positions) / static_cast<double>(params_.off_map_sample)))));
+    sample_at_.clear();
+    for (Eigen::Index r = 0; r < field.rows; r += stride)
+      for (Eigen::Index c = 0; c < field.cols; c += stride) sample_at_.push_back({r, c});
+    Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> values(
+        field.values.rows(), static_cast<Eigen::Index>(sample_at_.size()));
+    for (std::size_t k = 0; k < sample_at_.size(); ++k)
+      values.col(static_cast<Eigen::Index>(k)) = field.at(sample_at_[k].row, sample_at_[k].col);
+    sample_tiles_ = detail::descriptor_tiles<scalar_type>(values);
+  }
+
+  // True when some pose of heading a has patch m off the map (and the patch lands somewhere).
+  [[nodiscard]] bool off_somewhere(Eigen::Index a, Eigen::Index m) const {
+    const patch_reach& r = heading_[static_cast<std::size_t>(a)].reach[static_cast<std::size_t>(m)];
+    return r.rows > 0 && r.cols > 0 && (r.rows < rows_ || r.cols < cols_);
+  }
+
+  // means_[a M + m] for every off_ patch, over the lattice sample: the patch's distances (all
+  // pairs: its heading's summed distance) at the sample positions inside the field rectangle
+  // it reads, averaged in double; a rectangle holding no sample position takes the mean over
+  // the whole sample. The same computation whichever patches are asked for (the kernel gives
+  // each descriptor the same values whatever its neighbours), so the hook's means equal the
+  // whole grid's. Reads tactile_ and norms_ in the kernel's column layout (`column`).
+  template <class Column>
+  void sample_means(const Column& column) const {
+    const bool summed = params_.pairs == pairing::all_pairs;
+    means_.assign(off_.size(), scalar_type(0));
+    struct item {
+      Eigen::Index a, m, out;
+    };
+    std::vector<item> items;
+    std::vector<Eigen::Index> columns;
+    const Eigen::Index group = summed ? m_count_ : 1;
+    for (Eigen::Index a = 0; a < angles_; ++a) {
+      bool any = false;
+      for (Eigen::Index m = 0; m < m_count_; ++m) {
+        if (off_[static_cast<std::size_t>(a * m_count_ + m)] == 0) continue;
+        any = true;
+        items.push_back({a, m, summed ? static_cast<Eigen::Index>(columns.size()) / group
+                                      : static_cast<Eigen::Index>(columns.size())});
+        if (!summed) columns.push_back(column(a, m));
+      }
+      if (summed && any)
+        for (Eigen::Index m = 0; m < m_count_; ++m) columns.push_back(column(a, m));
+    }
+    if (items.empty()) return;
+    const auto count = static_cast<Eigen::Index>(columns.size());
+    Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g(tactile_.rows(), count);
+    std::vector<scalar_type> norms(static_cast<std::size_t>(count));
+    for (Eigen::Index j = 0; j < count; ++j) {
+      g.col(j) = tactile_.col(columns[static_cast<std::size_t>(j)]);
+      norms[static_cast<std::size_t>(j)] =
+          norms_[static_cast<std::size_t>(columns[static_cast<std::size_t>(j)])];
+    }
+    constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
+    const Eigen::Index k_count = sample_tiles_.positions();
+    const Eigen::Index padded = (k_count + width - 1) / width * width;
+    auto& d = sample_buffer_;
+    d.resize(padded, count / group);
+    detail::distances_each(sample_tiles_, g, norms.data(), d.data(), d.rows(), nullptr, {}, group);
+    for (const item& it : items) {
+      const heading_tables& h = heading_[static_cast<std::size_t>(it.a)];
+      const patch_reach& r = h.reach[static_cast<std::size_t>(it.m)];
+      const grid_cell o = h.field_offset[static_cast<std::size_t>(it.m)];
+      const Eigen::Index r0 = r.first_row + o.row, c0 = r.first_col + o.col;
+      double sum = 0.0, all = 0.0;
+      Eigen::Index n = 0;
+      for (Eigen::Index k = 0; k < k_count; ++k) {
+        const grid_cell at = sample_at_[static_cast<std::size_t>(k)];
+        const auto v = static_cast<double>(d(k, it.out));
+        all += v;
+        if (at.row >= r0 && at.row < r0 + r.rows && at.col >= c0 && at.col < c0 + r.cols) {
+          sum += v;
+          ++n;
+        }
+      }
+      means_[static_cast<std::size_t>(it.a * m_count_ + it.m)] = static_cast<scalar_type>(
+          n > 0 ? sum / static_cast<double>(n) : all / static_cast<double>(k_count));
+    }
+  }
+
   // off_[a M + m] = 1 when a pose of `rows` (heading a) has patch m off the map, and the patch
   // lands somewhere (a patch that never does adds nothing, see `distances`).
   void mark_off_map(Eigen::Index a, std::span<const row_segment> rows) const {
@@ -908,6 +1042,11 @@ class rotated_descriptor_likelihood {
   mutable std::vector<scalar_type> norms_;        // the wanted descriptors' squared norms
   mutable std::vector<char> off_;                 // per a M + m: some requested pose off the map
   mutable std::vector<scalar_type> means_;        // per a M + m: its off-map mean (off_ only)
+  // Large maps: the lattice sample of the field for the off-map means (empty: exact means),
+  // its positions (field row, column), and its distances to the asked descriptors.
+  detail::descriptor_tiles<scalar_type> sample_tiles_;
+  std::vector<grid_cell> sample_at_;
+  mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> sample_buffer_;
 };
 
 }  // namespace tacmap

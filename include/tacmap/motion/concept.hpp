@@ -1,7 +1,10 @@
 // tacmap: the `motion_model` concept — the control update of the Bayes filter (paper, Table 1).
 #pragma once
 
+#include <algorithm>
 #include <concepts>
+#include <span>
+#include <vector>
 
 #include "tacmap/grid/concept.hpp"
 
@@ -11,11 +14,12 @@ namespace tacmap {
 struct prediction_report {
   /// Fraction of belief mass (0..1) that the motion carried off the grid before renormalising.
   double mass_lost = 0.0;
-  /// Tracking mode (`bayes_filter::set_tracking`): only the mass inside the last tracked
-  /// update's support box was moved (`moves_box`); the rest stayed where it was.
+  /// Tracking mode (`bayes_filter::set_tracking`): only the mass inside the boxes around the
+  /// last tracked update's support was moved (`moves_box`); the rest stayed where it was.
   bool windowed = false;
   /// When `windowed`: a bound on the total-variation distance to the whole-grid prediction of
-  /// the same belief (the mass left outside the box); 0 otherwise.
+  /// the same belief (the mass left outside the boxes, plus what was moved off the grid); 0
+  /// otherwise.
   double tracking_error_bound = 0.0;
 };
 
@@ -27,6 +31,15 @@ struct grid_box {
   Eigen::Index rows = 0;
   Eigen::Index cols = 0;
 };
+
+namespace detail {
+/// The part of `b` inside a rows x cols image (empty: rows or cols 0).
+inline grid_box clip_box(const grid_box& b, Eigen::Index rows, Eigen::Index cols) {
+  const Eigen::Index r0 = std::max<Eigen::Index>(b.row, 0), c0 = std::max<Eigen::Index>(b.col, 0);
+  const Eigen::Index r1 = std::min(b.row + b.rows, rows), c1 = std::min(b.col + b.cols, cols);
+  return {r0, c0, std::max<Eigen::Index>(r1 - r0, 0), std::max<Eigen::Index>(c1 - c0, 0)};
+}
+}  // namespace detail
 
 /// The control update bel_bar(x_t) = sum over x_{t-1} of p(x_t | u_t, x_{t-1}) bel(x_{t-1}),
 /// done for the whole grid in one call (never per cell, never as a dense transition matrix).
@@ -60,18 +73,23 @@ concept motion_model = state_grid<G> &&
 };
 
 /// Motion models that can move part of a belief in place (tracking mode): for a `const M m`, a
-/// `const G g`, a normalised `belief_array<G> b`, a `grid_box box` inside the belief image (of
-/// every layer, for layered grids) and a control `u`, `m.predict_box(g, b, box, u)` replaces the
-/// mass inside `box` by its prediction,
-/// exactly as `predict` would move it, leaves every state outside `box` unchanged and returns
-/// true; or returns false with `b` unchanged when it cannot (the moved mass would reach the
-/// grid's edge, a control `predict` would refuse): the caller then predicts the whole grid.
-/// `b`'s sum changes only by rounding (no renormalisation: no mass may leave the grid).
+/// `const G g`, a normalised `belief_array<G> b`, pairwise disjoint `grid_box`es `boxes` inside
+/// the belief image (of every layer, for layered grids), a control `u` and a
+/// `std::vector<grid_box> landed` and a `double dropped`,
+/// `m.predict_boxes(g, b, boxes, u, landed, dropped)` replaces the mass inside the boxes by its
+/// prediction, exactly as `predict` would move it (reading every box before writing any), leaves
+/// every state outside them unchanged, sets `landed[i]` to a rectangle of the grid holding all
+/// of box i's moved mass, sets `dropped` to the mass carried off the grid (which `predict`
+/// would drop before renormalising; not renormalised here) and returns true; or returns false
+/// with `b` unchanged when it cannot (mass would reach an edge where `predict` does anything
+/// but drop it, a control `predict` would refuse): the caller then predicts the whole grid.
+/// Otherwise `b`'s sum changes only by rounding and `dropped`. `odometry_gaussian` and
+/// `pose_odometry_gaussian` model it (and offer `predict_box` for one box).
 template <class M, class G>
 concept moves_box = motion_model<M, G> &&
-    requires(const M& m, const G& g, belief_array<G>& b, const grid_box& box,
-             const typename M::control_type& u) {
-  { m.predict_box(g, b, box, u) } -> std::same_as<bool>;
+    requires(const M& m, const G& g, belief_array<G>& b, std::span<const grid_box> boxes,
+             const typename M::control_type& u, std::vector<grid_box>& landed, double& dropped) {
+  { m.predict_boxes(g, b, boxes, u, landed, dropped) } -> std::same_as<bool>;
 };
 
 }  // namespace tacmap

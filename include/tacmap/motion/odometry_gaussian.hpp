@@ -30,6 +30,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
@@ -212,46 +213,87 @@ class odometry_gaussian {
     });
   }
 
-  /// Tracking mode (`moves_box`): the mass inside `box` moved as `predict` moves it, in place;
-  /// every state outside `box` keeps its value. The box is copied, with R + 1 zero cells on each
-  /// side (the reach of the stencil and the bilinear split), into a small window that is
-  /// transported by the shift's fraction only and added back at the box's place moved by the
-  /// integer part: each output is the same weighted sum of the same taps as in `predict`, less
-  /// the taps that read outside the box. False, `belief` unchanged, when that window would reach
-  /// past the grid's edge (where `predict` drops or clamps mass) or the odometry is not finite.
+  /// Tracking mode (`moves_box`): the mass inside each of the pairwise disjoint `boxes` moved as
+  /// `predict` moves it, in place; every state outside them keeps its value. Each box is copied,
+  /// with R + 1 zero cells on each side (the reach of the stencil and the bilinear split), into
+  /// a small window that is transported by the shift's fraction only and added back at the box's
+  /// place moved by the integer part: each output is the same weighted sum of the same taps as
+  /// in `predict`, less the taps that read outside the boxes. Every box is read (and cleared)
+  /// before any moved window is added, so a window may overlap another box. `landed[i]` is box
+  /// i's window on the grid (where its mass now is). Mass a window carries past the grid's edge
+  /// is dropped, as `predict` drops it with `off_grid::renormalize`, and its sum returned in
+  /// `dropped` (not renormalised: the caller decides). False, `belief` unchanged, when a window
+  /// would reach past the edge with `off_grid::clamp` (which piles mass on edge states), when
+  /// it would leave the grid entirely, or when the odometry is not finite.
   template <metric_planar_grid G>
-  bool predict_box(const G& grid, belief_array<G>& belief, const grid_box& box,
-                   const odometry& u) const {
+  bool predict_boxes(const G& grid, belief_array<G>& belief, std::span<const grid_box> boxes,
+                     const odometry& u, std::vector<grid_box>& landed, double& dropped) const {
     using T = typename G::scalar_type;
     if (!(std::isfinite(u.dx_mm) && std::isfinite(u.dy_mm))) return false;
     const Eigen::Index rows = grid.rows(), cols = grid.cols();
     if (grid.size() != rows * cols || belief.size() != grid.size()) return false;
-    TACMAP_ASSERT(box.rows > 0 && box.cols > 0 && box.row >= 0 && box.col >= 0 &&
-                      box.row + box.rows <= rows && box.col + box.cols <= cols,
-                  "predict_box: the box must lie inside the belief image");
     const double sx = u.dx_mm / grid.mm_per_px(), sy = u.dy_mm / grid.mm_per_px();
     const double fx_floor = std::floor(sx), fy_floor = std::floor(sy);
     if (!(std::abs(fx_floor) < static_cast<double>(cols) &&
           std::abs(fy_floor) < static_cast<double>(rows)))
       return false;
     const Eigen::Index pad = radius_ + 1;
-    const Eigen::Index h = box.rows + 2 * pad, w = box.cols + 2 * pad;
-    const Eigen::Index top = box.row - pad + static_cast<Eigen::Index>(fy_floor);
-    const Eigen::Index left = box.col - pad + static_cast<Eigen::Index>(fx_floor);
-    if (top < 0 || left < 0 || top + h > rows || left + w > cols) return false;
+    landed.clear();
+    for (const grid_box& box : boxes) {
+      TACMAP_ASSERT(box.rows > 0 && box.cols > 0 && box.row >= 0 && box.col >= 0 &&
+                        box.row + box.rows <= rows && box.col + box.cols <= cols,
+                    "predict_boxes: a box must lie inside the belief image");
+      const grid_box w{box.row - pad + static_cast<Eigen::Index>(fy_floor),
+                       box.col - pad + static_cast<Eigen::Index>(fx_floor), box.rows + 2 * pad,
+                       box.cols + 2 * pad};
+      const bool inside = w.row >= 0 && w.col >= 0 && w.row + w.rows <= rows && w.col + w.cols <= cols;
+      if (!inside && params_.boundary == off_grid::clamp) return false;
+      if (w.row + w.rows <= 0 || w.col + w.cols <= 0 || w.row >= rows || w.col >= cols)
+        return false;
+      landed.push_back(w);
+    }
     separable_scratch<T>& s = workspace<T>();
-    s.box_in.setZero(h * w);
-    s.box_out.resize(h * w);
-    Eigen::Map<image<T>> in_box(s.box_in.data(), h, w);
     Eigen::Map<image<T>> img(belief.data(), rows, cols);
-    auto source = img.block(box.row, box.col, box.rows, box.cols);
-    in_box.block(pad, pad, box.rows, box.cols) = source;
-    Eigen::Map<image<T>> out_box(s.box_out.data(), h, w);
-    transport(Eigen::Map<const image<T>>(s.box_in.data(), h, w), out_box, sx - fx_floor,
-              sy - fy_floor, grid.mm_to_px(params_.sigma_mm));
-    source.setZero();
-    img.block(top, left, h, w) += out_box;
+    // 1. Every box into its zero-margined window (one buffer, windows one after another).
+    Eigen::Index total = 0;
+    for (const grid_box& w : landed) total += w.rows * w.cols;
+    s.box_in.setZero(total);
+    s.box_out.resize(total);
+    Eigen::Index at = 0;
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      const grid_box& box = boxes[i];
+      const grid_box& w = landed[i];
+      Eigen::Map<image<T>> in_box(s.box_in.data() + at, w.rows, w.cols);
+      auto source = img.block(box.row, box.col, box.rows, box.cols);
+      in_box.block(pad, pad, box.rows, box.cols) = source;
+      source.setZero();
+      at += w.rows * w.cols;
+    }
+    // 2. Each window transported and added where it lands; what falls off the grid dropped.
+    at = 0;
+    dropped = 0.0;
+    for (grid_box& w : landed) {
+      Eigen::Map<image<T>> out_box(s.box_out.data() + at, w.rows, w.cols);
+      transport(Eigen::Map<const image<T>>(s.box_in.data() + at, w.rows, w.cols), out_box,
+                sx - fx_floor, sy - fy_floor, grid.mm_to_px(params_.sigma_mm));
+      const grid_box c = detail::clip_box(w, rows, cols);
+      const auto kept = out_box.block(c.row - w.row, c.col - w.col, c.rows, c.cols);
+      if (c.rows != w.rows || c.cols != w.cols)
+        dropped += static_cast<double>(out_box.sum()) - static_cast<double>(kept.sum());
+      img.block(c.row, c.col, c.rows, c.cols) += kept;
+      at += w.rows * w.cols;
+      w = c;
+    }
     return true;
+  }
+
+  /// `predict_boxes` for one box.
+  template <metric_planar_grid G>
+  bool predict_box(const G& grid, belief_array<G>& belief, const grid_box& box,
+                   const odometry& u) const {
+    std::vector<grid_box> landed;
+    double dropped = 0.0;
+    return predict_boxes(grid, belief, std::span<const grid_box>(&box, 1), u, landed, dropped);
   }
 
   /// The un-normalised core of `predict` for one belief image: out = in shifted by

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cmath>
+#include <span>
 #include <vector>
 
 #include "tacmap/detail/weighted_sum.hpp"
@@ -147,18 +148,23 @@ class pose_odometry_gaussian {
     });
   }
 
-  /// Tracking mode (`moves_box`): the mass inside `box` of every heading layer moved as
-  /// `predict` moves it, in place; every state outside the box (in any layer) keeps its value.
-  /// Per layer a, the box is copied with the planar model's reach of zero cells on each side,
-  /// transported by the fraction of that layer's map-frame shift only, and the turn's taps add
-  /// each moved window, at the box's place moved by the layer's integer shift, into the layers
-  /// the turn carries it to: each output is the same weighted sum of the same taps as in
-  /// `predict`, less the taps that read outside the box. False, `belief` unchanged, when a moved
-  /// window would reach past the grid's edge (where `predict` drops or clamps mass) or the
-  /// odometry is not finite or a turn `predict` refuses.
+  /// Tracking mode (`moves_box`): the mass inside each of the pairwise disjoint `boxes`, in
+  /// every heading layer, moved as `predict` moves it, in place; every state outside them (in
+  /// any layer) keeps its value. Per box and layer a, the box is copied with the planar model's
+  /// reach of zero cells on each side, transported by the fraction of that layer's map-frame
+  /// shift only, and the turn's taps add each moved window, at the box's place moved by the
+  /// layer's integer shift, into the layers the turn carries it to: each output is the same
+  /// weighted sum of the same taps as in `predict`, less the taps that read outside the boxes.
+  /// Every box is read (and cleared) before any window is added, so windows may overlap other
+  /// boxes. `landed[i]`: the rectangle of the grid covering box i's windows in every layer.
+  /// Mass a window carries past the grid's edge is dropped, as `predict` drops it with
+  /// `off_grid::renormalize`, and its sum returned in `dropped` (not renormalised). False,
+  /// `belief` unchanged, when a moved window would reach past the edge with `off_grid::clamp`
+  /// or leave the grid entirely, or the odometry is not finite or a turn `predict` refuses.
   template <metric_pose_grid G>
-  bool predict_box(const G& grid, belief_array<G>& belief, const grid_box& box,
-                   const sensor_odometry& u) const {
+  bool predict_boxes(const G& grid, belief_array<G>& belief, std::span<const grid_box> boxes,
+                     const sensor_odometry& u, std::vector<grid_box>& landed,
+                     double& dropped) const {
     using T = typename G::scalar_type;
     if (!(std::isfinite(u.du_mm) && std::isfinite(u.dv_mm) && std::isfinite(u.dtheta_rad)) ||
         std::abs(u.dtheta_rad) > 1e3)
@@ -166,14 +172,10 @@ class pose_odometry_gaussian {
     const auto layers = static_cast<Eigen::Index>(grid.angle_count());
     const Eigen::Index rows = grid.rows(), cols = grid.cols(), plane = grid.layer_size();
     if (plane != rows * cols || belief.size() != plane * layers) return false;
-    TACMAP_ASSERT(box.rows > 0 && box.cols > 0 && box.row >= 0 && box.col >= 0 &&
-                      box.row + box.rows <= rows && box.col + box.cols <= cols,
-                  "predict_box: the box must lie inside the belief image");
     const Eigen::Index pad = planar_.radius_px() + 1;
-    const Eigen::Index h = box.rows + 2 * pad, w = box.cols + 2 * pad;
-    // Where each layer's window lands (its integer shift), all checked before anything moves.
-    std::vector<grid_cell>& at = box_at_;
-    at.resize(static_cast<std::size_t>(layers));
+    // Each layer's integer shift and its fraction, all windows checked before anything moves.
+    std::vector<grid_cell>& shift = box_at_;
+    shift.resize(static_cast<std::size_t>(layers));
     std::vector<double>& fraction = box_fraction_;
     fraction.resize(static_cast<std::size_t>(2 * layers));
     for (Eigen::Index a = 0; a < layers; ++a) {
@@ -183,49 +185,100 @@ class pose_odometry_gaussian {
       const double fx = std::floor(sx), fy = std::floor(sy);
       if (!(std::abs(fx) < static_cast<double>(cols) && std::abs(fy) < static_cast<double>(rows)))
         return false;
-      const grid_cell corner{box.row - pad + static_cast<Eigen::Index>(fy),
-                             box.col - pad + static_cast<Eigen::Index>(fx)};
-      if (corner.row < 0 || corner.col < 0 || corner.row + h > rows || corner.col + w > cols)
-        return false;
-      at[static_cast<std::size_t>(a)] = corner;
+      shift[static_cast<std::size_t>(a)] = {static_cast<Eigen::Index>(fy),
+                                            static_cast<Eigen::Index>(fx)};
       fraction[static_cast<std::size_t>(2 * a)] = sx - fx;
       fraction[static_cast<std::size_t>(2 * a + 1)] = sy - fy;
     }
-    // 1. Each layer's box, moved by its fraction into a window of its own.
+    landed.clear();
+    Eigen::Index total = 0;  // window cells over every box and layer
+    for (const grid_box& box : boxes) {
+      TACMAP_ASSERT(box.rows > 0 && box.cols > 0 && box.row >= 0 && box.col >= 0 &&
+                        box.row + box.rows <= rows && box.col + box.cols <= cols,
+                    "predict_boxes: a box must lie inside the belief image");
+      const Eigen::Index h = box.rows + 2 * pad, w = box.cols + 2 * pad;
+      Eigen::Index r0 = rows, c0 = cols, r1 = 0, c1 = 0;
+      for (const grid_cell& d : shift) {
+        const Eigen::Index top = box.row - pad + d.row, left = box.col - pad + d.col;
+        if ((top < 0 || left < 0 || top + h > rows || left + w > cols) &&
+            params_.boundary == off_grid::clamp)
+          return false;
+        if (top + h <= 0 || left + w <= 0 || top >= rows || left >= cols) return false;
+        r0 = std::min(r0, top);
+        c0 = std::min(c0, left);
+        r1 = std::max(r1, top + h);
+        c1 = std::max(c1, left + w);
+      }
+      landed.push_back(detail::clip_box({r0, c0, r1 - r0, c1 - c0}, rows, cols));
+      total += layers * h * w;
+    }
+    // 1. Each box of each layer, moved by its fraction into a window of its own (box after
+    // box, layer after layer in one buffer).
     const double sigma_px = translation_sigma_mm(u, layers) / grid.mm_per_px();
     auto& moved = moved_<T>();
-    moved.setZero(layers * h * w);
-    Eigen::Array<T, Eigen::Dynamic, 1> padded = Eigen::Array<T, Eigen::Dynamic, 1>::Zero(h * w);
+    moved.setZero(total);
     std::vector<char>& has_mass = box_has_mass_;
-    has_mass.assign(static_cast<std::size_t>(layers), 0);
-    for (Eigen::Index a = 0; a < layers; ++a) {
-      Eigen::Map<image<T>> img(belief.data() + a * plane, rows, cols);
-      auto source = img.block(box.row, box.col, box.rows, box.cols);
-      if (!(source.maxCoeff() > T(0))) continue;
-      has_mass[static_cast<std::size_t>(a)] = 1;
-      Eigen::Map<image<T>> in_box(padded.data(), h, w);
-      in_box.block(pad, pad, box.rows, box.cols) = source;
-      Eigen::Map<image<T>> out_box(moved.data() + a * h * w, h, w);
-      planar_.transport(Eigen::Map<const image<T>>(padded.data(), h, w), out_box,
-                        fraction[static_cast<std::size_t>(2 * a)],
-                        fraction[static_cast<std::size_t>(2 * a + 1)], sigma_px);
-      source.setZero();
-    }
-    // 2. The turn: layer b receives w_o times layer (b - o)'s moved window, where it landed.
-    const turn t = turn_taps(u.dtheta_rad, layers);
-    const auto wrap = [layers](Eigen::Index o) { return ((o % layers) + layers) % layers; };
-    for (Eigen::Index b = 0; b < layers; ++b) {
-      Eigen::Map<image<T>> img(belief.data() + b * plane, rows, cols);
-      for (std::size_t k = 0; k < t.offsets.size(); ++k) {
-        const Eigen::Index a = wrap(b - t.offsets[k]);
-        const auto weight = static_cast<T>(t.weights[k]);
-        if (!has_mass[static_cast<std::size_t>(a)] || !(weight > T(0))) continue;
-        const grid_cell corner = at[static_cast<std::size_t>(a)];
-        img.block(corner.row, corner.col, h, w) +=
-            Eigen::Map<const image<T>>(moved.data() + a * h * w, h, w) * weight;
+    has_mass.assign(static_cast<std::size_t>(layers) * boxes.size(), 0);
+    Eigen::Array<T, Eigen::Dynamic, 1> padded;
+    Eigen::Index at = 0;
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      const grid_box& box = boxes[i];
+      const Eigen::Index h = box.rows + 2 * pad, w = box.cols + 2 * pad;
+      padded.setZero(h * w);
+      for (Eigen::Index a = 0; a < layers; ++a, at += h * w) {
+        Eigen::Map<image<T>> img(belief.data() + a * plane, rows, cols);
+        auto source = img.block(box.row, box.col, box.rows, box.cols);
+        if (!(source.maxCoeff() > T(0))) continue;
+        has_mass[i * static_cast<std::size_t>(layers) + static_cast<std::size_t>(a)] = 1;
+        Eigen::Map<image<T>> in_box(padded.data(), h, w);
+        in_box.block(pad, pad, box.rows, box.cols) = source;
+        Eigen::Map<image<T>> out_box(moved.data() + at, h, w);
+        planar_.transport(Eigen::Map<const image<T>>(padded.data(), h, w), out_box,
+                          fraction[static_cast<std::size_t>(2 * a)],
+                          fraction[static_cast<std::size_t>(2 * a + 1)], sigma_px);
+        source.setZero();
       }
     }
+    // 2. The turn: layer b receives w_o times layer (b - o)'s moved window, where it landed;
+    // what lands off the grid is dropped.
+    const turn t = turn_taps(u.dtheta_rad, layers);
+    const auto wrap = [layers](Eigen::Index o) { return ((o % layers) + layers) % layers; };
+    at = 0;
+    dropped = 0.0;
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      const grid_box& box = boxes[i];
+      const Eigen::Index h = box.rows + 2 * pad, w = box.cols + 2 * pad;
+      for (Eigen::Index b = 0; b < layers; ++b) {
+        Eigen::Map<image<T>> img(belief.data() + b * plane, rows, cols);
+        for (std::size_t k = 0; k < t.offsets.size(); ++k) {
+          const Eigen::Index a = wrap(b - t.offsets[k]);
+          const auto weight = static_cast<T>(t.weights[k]);
+          if (!has_mass[i * static_cast<std::size_t>(layers) + static_cast<std::size_t>(a)] ||
+              !(weight > T(0)))
+            continue;
+          const grid_cell d = shift[static_cast<std::size_t>(a)];
+          const grid_box win{box.row - pad + d.row, box.col - pad + d.col, h, w};
+          const grid_box c = detail::clip_box(win, rows, cols);
+          const Eigen::Map<const image<T>> from(moved.data() + at + a * h * w, h, w);
+          const auto kept = from.block(c.row - win.row, c.col - win.col, c.rows, c.cols);
+          if (c.rows != h || c.cols != w)
+            dropped += static_cast<double>(weight) *
+                       (static_cast<double>(from.sum()) - static_cast<double>(kept.sum()));
+          img.block(c.row, c.col, c.rows, c.cols) += kept * weight;
+        }
+      }
+      at += layers * h * w;
+    }
     return true;
+  }
+
+  /// `predict_boxes` for one box.
+  template <metric_pose_grid G>
+  bool predict_box(const G& grid, belief_array<G>& belief, const grid_box& box,
+                   const sensor_odometry& u) const {
+    std::vector<grid_box> landed;
+    double dropped = 0.0;
+    return predict_boxes(grid, belief, std::span<const grid_box>(&box, 1), u, landed, dropped);
   }
 
  private:
@@ -290,7 +343,8 @@ class pose_odometry_gaussian {
   // object is not reentrant, like odometry_gaussian.
   mutable Eigen::ArrayXf moved_f_;
   mutable Eigen::ArrayXd moved_d_;
-  // predict_box's scratch: each layer's window corner, shift fractions, and whether it has mass.
+  // predict_boxes' scratch: each layer's integer shift and its fractions, and whether a box's
+  // layer has mass.
   mutable std::vector<grid_cell> box_at_;
   mutable std::vector<double> box_fraction_;
   mutable std::vector<char> box_has_mass_;

@@ -1,6 +1,7 @@
 // tacmap: the support of a concentrated belief, for the filter's tracking mode
 // (`bayes_filter::set_tracking`): states with p >= t for a threshold t below which the belief
-// holds at most epsilon of its mass, found with whole-grid passes (no sort of 300,000 states).
+// holds at most epsilon of its mass, found with passes over the grid or over the region the
+// mass can be in (no sort of 300,000 states).
 #pragma once
 
 #include <Eigen/Core>
@@ -8,10 +9,12 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <span>
 #include <vector>
 #include <xsimd/xsimd.hpp>
 
 #include "tacmap/measurement/concept.hpp"
+#include "tacmap/motion/concept.hpp"
 #include "tacmap/simd.hpp"
 
 namespace tacmap::detail {
@@ -56,24 +59,52 @@ std::array<double, support_candidates> mass_below(const T* p, Eigen::Index n,
   return out;
 }
 
+/// The geometric candidate thresholds between epsilon / n and 1 (see `support_threshold`).
+template <class T>
+std::array<T, support_candidates> support_candidate_thresholds(Eigen::Index n, double epsilon) {
+  constexpr std::size_t K = support_candidates;
+  const double lo = epsilon / static_cast<double>(std::max<Eigen::Index>(n, 1));
+  const double hi = std::max(1.0, lo);
+  const double ratio = std::pow(hi / lo, 1.0 / static_cast<double>(K - 1));
+  std::array<T, K> t{};
+  for (std::size_t k = 0; k < K; ++k)
+    t[k] = static_cast<T>(lo * std::pow(ratio, static_cast<double>(k)));
+  return t;
+}
+
+/// The largest candidate threshold whose mass below is <= epsilon.
+template <class T>
+T best_threshold(const std::array<T, support_candidates>& t,
+                 const std::array<double, support_candidates>& below, double epsilon) {
+  T best = t[0];
+  for (std::size_t k = 1; k < support_candidates; ++k)
+    if (below[k] <= epsilon) best = t[k];
+  return best;
+}
+
 /// The largest candidate threshold t whose mass below is <= epsilon (see `mass_below`); the
 /// support {p >= t} then holds >= 1 - epsilon of the mass. Candidates are geometric between
 /// epsilon / n and 1: within a factor (n / epsilon)^(1/15) (5.8 for 547,000 states and 1e-6)
 /// of the exact threshold of the smallest such set.
 template <class T>
 T support_threshold(const T* p, Eigen::Index n, double epsilon) {
-  constexpr std::size_t K = support_candidates;
-  const double lo = epsilon / static_cast<double>(n);
-  const double hi = std::max(1.0, lo);
-  const double ratio = std::pow(hi / lo, 1.0 / static_cast<double>(K - 1));
-  std::array<T, K> t{};
-  for (std::size_t k = 0; k < K; ++k)
-    t[k] = static_cast<T>(lo * std::pow(ratio, static_cast<double>(k)));
-  const std::array<double, K> below = mass_below(p, n, t);
-  T best = t[0];
-  for (std::size_t k = 1; k < K; ++k)
-    if (below[k] <= epsilon) best = t[k];
-  return best;
+  const auto t = support_candidate_thresholds<T>(n, epsilon);
+  return best_threshold(t, mass_below(p, n, t), epsilon);
+}
+
+/// `support_threshold` over the states of `ranges` only (sorted, disjoint): the largest
+/// candidate whose mass below, among those states, is <= epsilon.
+template <class T>
+T support_threshold_on(const T* p, std::span<const state_range> ranges, double epsilon) {
+  Eigen::Index n = 0;
+  for (const state_range& r : ranges) n += r.end - r.begin;
+  const auto t = support_candidate_thresholds<T>(n, epsilon);
+  std::array<double, support_candidates> below{};
+  for (const state_range& r : ranges) {
+    const auto b = mass_below(p + r.begin, r.end - r.begin, t);
+    for (std::size_t k = 0; k < support_candidates; ++k) below[k] += b[k];
+  }
+  return best_threshold(t, below, epsilon);
 }
 
 /// What `support_ranges` found.
@@ -83,19 +114,25 @@ struct support_summary {
   bool too_wide = false;    ///< stopped: more than the allowed states
 };
 
-/// The ranges of consecutive states with p >= t, into `out`, and the mass outside them. Stops
-/// (too_wide) as soon as more than `max_states` states are in: the caller takes the whole grid.
+/// The ranges of consecutive states in [begin, end) with p >= t, appended to `out` (a range
+/// that continues the last one extends it), their count and the others' mass added to `s`.
+/// Stops (too_wide) as soon as more than `max_states` states are in.
 template <class T>
-support_summary support_ranges(const T* p, Eigen::Index n, T t, Eigen::Index max_states,
-                               std::vector<state_range>& out) {
+void append_support(const T* p, Eigen::Index begin, Eigen::Index end, T t,
+                    Eigen::Index max_states, std::vector<state_range>& out, support_summary& s) {
   using batch = xsimd::batch<T, kernel_arch<T>>;
   constexpr auto width = static_cast<Eigen::Index>(batch::size);
-  out.clear();
-  support_summary s;
   const batch tb(t);
   Eigen::Index open = -1;  // first state of the range being built, or -1
   batch outside(T(0));
   Eigen::Index since_flush = 0;
+  const auto close = [&](Eigen::Index at) {
+    if (!out.empty() && out.back().end == open)
+      out.back().end = at;
+    else
+      out.push_back({open, at});
+    open = -1;
+  };
   const auto flush = [&] {
     s.outside += static_cast<double>(xsimd::hadd(outside));
     outside = batch(T(0));
@@ -107,22 +144,16 @@ support_summary support_ranges(const T* p, Eigen::Index n, T t, Eigen::Index max
       ++s.states;
     } else {
       s.outside += static_cast<double>(p[i]);
-      if (open >= 0) {
-        out.push_back({open, i});
-        open = -1;
-      }
+      if (open >= 0) close(i);
     }
   };
-  const Eigen::Index vec_end = n - n % width;
-  for (Eigen::Index i = 0; i < vec_end; i += width) {
+  const Eigen::Index vec_end = begin + (end - begin) - (end - begin) % width;
+  for (Eigen::Index i = begin; i < vec_end; i += width) {
     const batch v = batch::load_unaligned(p + i);
     const auto in = v >= tb;
     if (xsimd::none(in)) {
       outside += v;
-      if (open >= 0) {
-        out.push_back({open, i});
-        open = -1;
-      }
+      if (open >= 0) close(i);
       if (++since_flush == 128) flush();
     } else if (xsimd::all(in)) {
       if (open < 0) open = i;
@@ -132,14 +163,172 @@ support_summary support_ranges(const T* p, Eigen::Index n, T t, Eigen::Index max
     }
     if (s.states > max_states) {
       s.too_wide = true;
-      return s;
+      flush();
+      return;
     }
   }
-  for (Eigen::Index i = vec_end; i < n; ++i) lane(i);
+  for (Eigen::Index i = vec_end; i < end; ++i) lane(i);
   flush();
-  if (open >= 0) out.push_back({open, n});
+  if (open >= 0) close(end);
   s.too_wide = s.states > max_states;
+}
+
+/// The ranges of consecutive states with p >= t, into `out`, and the mass outside them. Stops
+/// (too_wide) as soon as more than `max_states` states are in: the caller takes the whole grid.
+template <class T>
+support_summary support_ranges(const T* p, Eigen::Index n, T t, Eigen::Index max_states,
+                               std::vector<state_range>& out) {
+  out.clear();
+  support_summary s;
+  append_support(p, 0, n, t, max_states, out, s);
   return s;
+}
+
+/// `support_ranges` over the states of `ranges` only (sorted, disjoint): `outside` is then the
+/// mass of their states below t.
+template <class T>
+support_summary support_ranges_on(const T* p, std::span<const state_range> ranges, T t,
+                                  Eigen::Index max_states, std::vector<state_range>& out) {
+  out.clear();
+  support_summary s;
+  for (const state_range& r : ranges) {
+    append_support(p, r.begin, r.end, t, max_states, out, s);
+    if (s.too_wide) break;
+  }
+  return s;
+}
+
+// --- The region a tracked belief's mass is in (boxes on the belief image, every layer) ---
+
+/// Boxes `a` and `b` overlap once each is grown by `gap` cells on every side.
+inline bool boxes_meet(const grid_box& a, const grid_box& b, Eigen::Index gap) {
+  return a.row - gap < b.row + b.rows && b.row - gap < a.row + a.rows &&
+         a.col - gap < b.col + b.cols && b.col - gap < a.col + a.cols;
+}
+
+/// The smallest box holding `a` and `b`.
+inline grid_box box_union(const grid_box& a, const grid_box& b) {
+  const Eigen::Index r0 = std::min(a.row, b.row), c0 = std::min(a.col, b.col);
+  const Eigen::Index r1 = std::max(a.row + a.rows, b.row + b.rows);
+  const Eigen::Index c1 = std::max(a.col + a.cols, b.col + b.cols);
+  return {r0, c0, r1 - r0, c1 - c0};
+}
+
+/// Merges boxes that come within `gap` cells of each other into their union, until none do:
+/// the result's boxes are pairwise disjoint (more than `gap` cells apart) and cover the input.
+inline void merge_boxes(std::vector<grid_box>& boxes, Eigen::Index gap) {
+  for (bool merged = true; merged;) {
+    merged = false;
+    for (std::size_t i = 0; i < boxes.size() && !merged; ++i)
+      for (std::size_t j = i + 1; j < boxes.size(); ++j)
+        if (boxes_meet(boxes[i], boxes[j], gap)) {
+          boxes[i] = box_union(boxes[i], boxes[j]);
+          boxes.erase(boxes.begin() + static_cast<std::ptrdiff_t>(j));
+          merged = true;
+          break;
+        }
+  }
+}
+
+/// Boxes on a `rows x cols` belief image covering every state of `ranges` (of a grid of layers
+/// of rows * cols states, layers united), states within `gap` cells of each other in one box.
+/// More than `max_boxes` boxes become their bounding box. Empty for empty ranges.
+inline std::vector<grid_box> cluster_boxes(std::span<const state_range> ranges, Eigen::Index rows,
+                                           Eigen::Index cols, Eigen::Index gap,
+                                           std::size_t max_boxes) {
+  std::vector<grid_box> boxes;
+  const Eigen::Index plane = rows * cols;
+  const auto add = [&](const grid_box& b) {
+    for (grid_box& c : boxes)
+      if (boxes_meet(c, b, gap)) {
+        c = box_union(c, b);
+        return;
+      }
+    boxes.push_back(b);
+  };
+  for (const state_range& r : ranges) {
+    // Layer by layer, then as rows: a partial first row, whole rows, a partial last row.
+    for (Eigen::Index b = r.begin; b < r.end;) {
+      const Eigen::Index layer_end = (b / plane + 1) * plane;
+      const Eigen::Index e = std::min(r.end, layer_end);
+      const Eigen::Index lb = b % plane, le = lb + (e - b);  // [lb, le) in the layer
+      const Eigen::Index first = lb / cols, last = (le - 1) / cols;
+      if (first == last) {
+        add({first, lb % cols, 1, le - lb});
+      } else {
+        add({first, lb % cols, 1, cols - lb % cols});
+        if (last > first + 1) add({first + 1, 0, last - first - 1, cols});
+        add({last, 0, 1, le - last * cols});
+      }
+      b = e;
+    }
+  }
+  merge_boxes(boxes, gap);
+  if (boxes.size() > max_boxes) {
+    grid_box all = boxes.front();
+    for (const grid_box& b : boxes) all = box_union(all, b);
+    boxes.assign(1, all);
+  }
+  return boxes;
+}
+
+/// The states of `boxes` (pairwise disjoint) in each of `layers` layers of rows * cols states,
+/// as sorted state ranges (one per box row and layer, adjacent ones joined).
+inline void box_ranges(std::span<const grid_box> boxes, Eigen::Index rows, Eigen::Index cols,
+                       Eigen::Index layers, std::vector<state_range>& out) {
+  struct segment {
+    Eigen::Index row, col, cols;
+  };
+  std::vector<segment> seg;
+  for (const grid_box& b : boxes)
+    for (Eigen::Index r = b.row; r < b.row + b.rows; ++r) seg.push_back({r, b.col, b.cols});
+  std::sort(seg.begin(), seg.end(), [](const segment& x, const segment& y) {
+    return x.row != y.row ? x.row < y.row : x.col < y.col;
+  });
+  out.clear();
+  for (Eigen::Index a = 0; a < layers; ++a)
+    for (const segment& s : seg) {
+      const Eigen::Index begin = a * rows * cols + s.row * cols + s.col;
+      if (!out.empty() && out.back().end == begin)
+        out.back().end = begin + s.cols;
+      else
+        out.push_back({begin, begin + s.cols});
+    }
+}
+
+/// Sum of p over the states of `a` that are not in `b` (both sorted, disjoint), in double.
+template <class T>
+double mass_outside_of(const T* p, std::span<const state_range> a,
+                       std::span<const state_range> b) {
+  double sum = 0.0;
+  std::size_t j = 0;
+  for (const state_range& r : a) {
+    Eigen::Index at = r.begin;
+    while (at < r.end) {
+      while (j < b.size() && b[j].end <= at) ++j;
+      const Eigen::Index stop = j < b.size() ? std::min(r.end, std::max(at, b[j].begin)) : r.end;
+      for (Eigen::Index i = at; i < stop; ++i) sum += static_cast<double>(p[i]);
+      at = stop;
+      if (j < b.size() && at < r.end && at >= b[j].begin) at = std::min(r.end, b[j].end);
+    }
+  }
+  return sum;
+}
+
+/// Sum of p over the states of `boxes` in every layer, in double.
+template <class T>
+double mass_in(const T* p, std::span<const grid_box> boxes, Eigen::Index rows, Eigen::Index cols,
+               Eigen::Index layers) {
+  double sum = 0.0;
+  for (Eigen::Index a = 0; a < layers; ++a)
+    for (const grid_box& b : boxes)
+      for (Eigen::Index r = b.row; r < b.row + b.rows; ++r) {
+        const T* row = p + a * rows * cols + r * cols + b.col;
+        double s = 0.0;
+        for (Eigen::Index c = 0; c < b.cols; ++c) s += static_cast<double>(row[c]);
+        sum += s;
+      }
+  return sum;
 }
 
 }  // namespace tacmap::detail
