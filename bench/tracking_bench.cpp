@@ -8,8 +8,8 @@
 // Unknown heading (pose_*): a pose-grid filter with the rotated classic_sift model over 36
 // headings — the first touch, a touch once localized (full and tracked: the model's hook then
 // computes only the support's headings and field tiles), and the tracked touch's predict and
-// update apart (both still pass over the whole grid: the pose predict, and the filter's support
-// search and rescaling).
+// update apart (once settled, neither passes over the whole grid: predict moves the boxes
+// around the support's clusters, the update searches only where their mass landed).
 //
 // The first touch also runs on 2 threads (issue 14, item 5): thread_pool_executor and, where
 // tacmap::tbb exists, oneTBB — the same filter, so the ratios are of one run:
