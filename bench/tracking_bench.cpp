@@ -18,11 +18,14 @@
 //     --benchmark_enable_random_interleaving=true
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <random>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "bench_maps.hpp"
 #include "tacmap/descriptor/dense_sift.hpp"
@@ -141,19 +144,37 @@ void first_touch(benchmark::State& state, Filter& f) {
   tacmap_bench::time_first_touch(state, f, cut());
 }
 
-// A touch once localized: predict 4 px right or back, update with the window there.
+// The window `dc` px right of the centre with Gaussian noise of sigma 0.05 (the map spans
+// [0, 1]), a different draw per `seed`: a touch as a sensor gives it, not an exact cut.
+tacmap::image<float> noisy_cut(Eigen::Index dc, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> noise(0.0F, 0.05F);
+  tacmap::image<float> z = cut(dc);
+  for (float& v : z.reshaped()) v += noise(rng);
+  return z;
+}
+
+// A touch once localized: predict 4 px right or back, update with the window there (exact
+// cuts, or 16 noisy draws of each in turn).
 template <class Filter>
-void localized_touch(benchmark::State& state, Filter& f, bool tracking) {
+void localized_touch(benchmark::State& state, Filter& f, bool tracking, bool noisy = false,
+                     double epsilon = 1e-6) {
   localize(f);
-  if (tracking) f.set_tracking({.epsilon = 1e-6});
-  const auto a = cut(), b = cut(4);
+  if (tracking) f.set_tracking({.epsilon = epsilon});
+  std::vector<tacmap::image<float>> as, bs;
+  for (unsigned k = 0; k < (noisy ? 16U : 1U); ++k) {
+    as.push_back(noisy ? noisy_cut(0, 2 * k + 1) : cut());
+    bs.push_back(noisy ? noisy_cut(4, 2 * k + 2) : cut(4));
+  }
   const auto [there, back] = moves<Filter>();
   bool at_a = true;
+  std::size_t draw = 0;
   double evaluated = 0.0, tracked = 0.0, touches = 0.0;
   for (auto _ : state) {
     f.predict(at_a ? there : back);
-    const tacmap::update_report r = f.update(at_a ? b : a);
+    const tacmap::update_report r = f.update(at_a ? bs[draw] : as[draw]);
     at_a = !at_a;
+    if (at_a) draw = (draw + 1) % as.size();
     evaluated += static_cast<double>(r.evaluated_states);
     tracked += r.path == tacmap::update_path::tracked ? 1.0 : 0.0;
     touches += 1.0;
@@ -228,9 +249,15 @@ void plain_predict_whole(benchmark::State& state) {
 }
 void plain_touch_full(benchmark::State& state) { localized_touch(state, plain(), false); }
 void plain_touch_tracked(benchmark::State& state) { localized_touch(state, plain(), true); }
+void plain_touch_tracked_noisy(benchmark::State& state) {
+  localized_touch(state, plain(), true, true, std::pow(10.0, -static_cast<double>(state.range(0))));
+}
 void pose_first_touch(benchmark::State& state) { first_touch(state, pose()); }
 void pose_touch_full(benchmark::State& state) { localized_touch(state, pose(), false); }
 void pose_touch_tracked(benchmark::State& state) { localized_touch(state, pose(), true); }
+void pose_touch_tracked_noisy(benchmark::State& state) {
+  localized_touch(state, pose(), true, true, std::pow(10.0, -static_cast<double>(state.range(0))));
+}
 void pose_predict(benchmark::State& state) { localized_part(state, pose(), false); }
 void pose_update_tracked(benchmark::State& state) { localized_part(state, pose(), true); }
 void latent_first_touch(benchmark::State& state) { first_touch(state, latent(false)); }
@@ -260,12 +287,14 @@ BENCHMARK(plain_first_touch_tbb_2_threads)
 #endif
 BENCHMARK(plain_touch_full)->Unit(benchmark::kMicrosecond);
 BENCHMARK(plain_touch_tracked)->Unit(benchmark::kMicrosecond);
+BENCHMARK(plain_touch_tracked_noisy)->Arg(6)->Arg(9)->Arg(12)->Unit(benchmark::kMicrosecond);
 BENCHMARK(plain_predict)->Unit(benchmark::kMicrosecond);
 BENCHMARK(plain_predict_whole)->Unit(benchmark::kMicrosecond);
 BENCHMARK(plain_update_tracked)->Unit(benchmark::kMicrosecond);
 BENCHMARK(pose_first_touch)->Unit(benchmark::kMillisecond);
 BENCHMARK(pose_touch_full)->Unit(benchmark::kMicrosecond);
 BENCHMARK(pose_touch_tracked)->Unit(benchmark::kMicrosecond);
+BENCHMARK(pose_touch_tracked_noisy)->Arg(6)->Arg(9)->Arg(12)->Unit(benchmark::kMicrosecond);
 BENCHMARK(pose_predict)->Unit(benchmark::kMicrosecond);
 BENCHMARK(pose_update_tracked)->Unit(benchmark::kMicrosecond);
 BENCHMARK(latent_first_touch)->Unit(benchmark::kMillisecond);

@@ -533,4 +533,81 @@ TEST_CASE("two clusters far apart are tracked in boxes of their own, within the 
   CHECK(tracked_updates >= 12);
 }
 
+TEST_CASE("the region helpers: thresholds over ranges, clusters in disjoint boxes, masses") {
+  namespace d = tacmap::detail;
+  // A belief image of 3 layers of 40 x 50 with mass in a few places and a faint floor.
+  const Eigen::Index rows = 40, cols = 50, layers = 3, plane = rows * cols;
+  Eigen::ArrayXf p = Eigen::ArrayXf::Constant(layers * plane, 1e-9F);
+  const auto put = [&](Eigen::Index a, Eigen::Index r, Eigen::Index c, float v) {
+    p(a * plane + r * cols + c) = v;
+  };
+  for (Eigen::Index r = 5; r < 9; ++r)
+    for (Eigen::Index c = 3; c < 8; ++c) put(0, r, c, 0.01F * static_cast<float>(1 + r + c));
+  put(1, 30, 40, 0.2F);
+  put(2, 31, 44, 0.1F);  // 4 columns from (30, 40): the same cluster
+  put(2, 0, 49, 0.05F);  // the last column, next to row 1's first: split, not joined
+  put(1, 39, 0, 0.05F);
+  p /= p.sum();
+  std::vector<state_range> support;
+  const float t = 1e-4F;
+  const d::support_summary s = d::support_ranges(p.data(), p.size(), t, p.size(), support);
+  CHECK(s.states == 20 + 4);
+  // Boxes: every support state inside one, the boxes pairwise more than 4 cells apart.
+  const std::vector<tacmap::grid_box> boxes = d::cluster_boxes(support, rows, cols, 4, 32);
+  CHECK(boxes.size() == 4);
+  for (const state_range& r : support)
+    for (Eigen::Index i = r.begin; i < r.end; ++i) {
+      const Eigen::Index within = i % plane, row = within / cols, col = within % cols;
+      int inside = 0;
+      for (const tacmap::grid_box& b : boxes)
+        inside += row >= b.row && row < b.row + b.rows && col >= b.col && col < b.col + b.cols;
+      CHECK(inside == 1);
+    }
+  for (std::size_t i = 0; i < boxes.size(); ++i)
+    for (std::size_t j = i + 1; j < boxes.size(); ++j)
+      CHECK_FALSE(d::boxes_meet(boxes[i], boxes[j], 4));
+  // More boxes than allowed: their bounding box.
+  const std::vector<tacmap::grid_box> one = d::cluster_boxes(support, rows, cols, 4, 3);
+  REQUIRE(one.size() == 1);
+  CHECK(one[0].rows == rows);
+  CHECK(one[0].cols == cols);
+  // The boxes' states in every layer, as sorted ranges; their mass and the mass outside S.
+  std::vector<state_range> region;
+  d::box_ranges(boxes, rows, cols, layers, region);
+  Eigen::Index count = 0;
+  double in_region = 0.0;
+  for (std::size_t k = 0; k < region.size(); ++k) {
+    if (k > 0) CHECK(region[k - 1].end < region[k].begin);  // sorted, joined when adjacent
+    count += region[k].end - region[k].begin;
+    for (Eigen::Index i = region[k].begin; i < region[k].end; ++i)
+      in_region += static_cast<double>(p(i));
+  }
+  Eigen::Index area = 0;
+  for (const tacmap::grid_box& b : boxes) area += b.rows * b.cols;
+  CHECK(count == area * layers);
+  CHECK(d::mass_in(p.data(), std::span<const tacmap::grid_box>(boxes), rows, cols, layers) ==
+        doctest::Approx(in_region).epsilon(1e-12));
+  double in_s = 0.0;
+  for (const state_range& r : support)
+    for (Eigen::Index i = r.begin; i < r.end; ++i) in_s += static_cast<double>(p(i));
+  CHECK(d::mass_outside_of(p.data(), std::span<const state_range>(region),
+                           std::span<const state_range>(support)) ==
+        doctest::Approx(in_region - in_s).epsilon(1e-9));
+  // Thresholds over the region: its candidates' masses below, as the whole-array function
+  // gives them range by range.
+  const auto cand = d::support_candidate_thresholds<float>(count, 1e-6);
+  const auto below = d::mass_below_on(p.data(), std::span<const state_range>(region), cand);
+  for (std::size_t k = 0; k < cand.size(); ++k) {
+    double expected = 0.0;
+    for (const state_range& r : region)
+      expected += d::mass_below(p.data() + r.begin, r.end - r.begin, cand)[k];
+    CHECK(below[k] == doctest::Approx(expected).epsilon(1e-6));
+  }
+  std::vector<state_range> within;
+  const d::support_summary sr = d::support_ranges_on(
+      p.data(), std::span<const state_range>(region), t, p.size(), within);
+  CHECK(within == support);  // every support state is in the region
+  CHECK(sr.outside == doctest::Approx(in_region - in_s).epsilon(1e-5));
+}
+
 }  // namespace test_tracking

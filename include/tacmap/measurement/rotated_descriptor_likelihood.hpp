@@ -953,8 +953,11 @@ class rotated_descriptor_likelihood {
           const scalar_type* d = field_buffer_.data() + (summed ? 0 : m) * field_buffer_.rows();
           terms.push_back({p / band, d[p]});
         }
-        std::stable_sort(terms.begin(), terms.end(),
-                         [](const term& x, const term& y) { return x.band < y.band; });
+        // Stable, by band: an insertion sort of the few terms (std::stable_sort took a heap
+        // buffer per pose, 8 % of a tracked touch at 36 headings).
+        for (std::size_t i = 1; i < terms.size(); ++i)
+          for (std::size_t j = i; j > 0 && terms[j - 1].band > terms[j].band; --j)
+            std::swap(terms[j - 1], terms[j]);
         scalar_type v = 0;
         for (const term& t : terms) v += t.value;
         for (Eigen::Index m = 0; m < m_count_; ++m) {

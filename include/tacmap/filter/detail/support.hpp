@@ -92,6 +92,52 @@ T support_threshold(const T* p, Eigen::Index n, double epsilon) {
   return best_threshold(t, mass_below(p, n, t), epsilon);
 }
 
+/// `mass_below` over the states of `ranges` (sorted, disjoint). The lanes carry on from one
+/// range to the next (a region's ranges are box rows of a few dozen states: reducing every
+/// candidate's lanes per range cost more than the comparisons), flushed to double every 1024
+/// states.
+template <class T>
+std::array<double, support_candidates> mass_below_on(const T* p,
+                                                     std::span<const state_range> ranges,
+                                                     const std::array<T, support_candidates>& t) {
+  using batch = xsimd::batch<T, kernel_arch<T>>;
+  constexpr auto width = static_cast<Eigen::Index>(batch::size);
+  constexpr std::size_t K = support_candidates;
+  std::array<double, K> out{};
+  std::array<batch, K> tb;
+  for (std::size_t k = 0; k < K; ++k) tb[k] = batch(t[k]);
+  std::array<batch, K> acc;
+  acc.fill(batch(T(0)));
+  batch everywhere(T(0));
+  Eigen::Index since = 0;
+  const auto flush = [&] {
+    const auto common = static_cast<double>(xsimd::hadd(everywhere));
+    for (std::size_t k = 0; k < K; ++k) {
+      out[k] += common + static_cast<double>(xsimd::hadd(acc[k]));
+      acc[k] = batch(T(0));
+    }
+    everywhere = batch(T(0));
+    since = 0;
+  };
+  for (const state_range& r : ranges) {
+    Eigen::Index i = r.begin;
+    for (; i + width <= r.end; i += width) {
+      const batch v = batch::load_unaligned(p + i);
+      if (xsimd::none(v >= tb[0])) {
+        everywhere += v;
+      } else {
+        for (std::size_t k = 0; k < K; ++k) acc[k] += xsimd::select(v < tb[k], v, batch(T(0)));
+      }
+      if ((since += width) >= 1024) flush();
+    }
+    for (; i < r.end; ++i)
+      for (std::size_t k = 0; k < K; ++k)
+        if (p[i] < t[k]) out[k] += static_cast<double>(p[i]);
+  }
+  flush();
+  return out;
+}
+
 /// `support_threshold` over the states of `ranges` only (sorted, disjoint): the largest
 /// candidate whose mass below, among those states, is <= epsilon.
 template <class T>
@@ -99,12 +145,7 @@ T support_threshold_on(const T* p, std::span<const state_range> ranges, double e
   Eigen::Index n = 0;
   for (const state_range& r : ranges) n += r.end - r.begin;
   const auto t = support_candidate_thresholds<T>(n, epsilon);
-  std::array<double, support_candidates> below{};
-  for (const state_range& r : ranges) {
-    const auto b = mass_below(p + r.begin, r.end - r.begin, t);
-    for (std::size_t k = 0; k < support_candidates; ++k) below[k] += b[k];
-  }
-  return best_threshold(t, below, epsilon);
+  return best_threshold(t, mass_below_on(p, ranges, t), epsilon);
 }
 
 /// What `support_ranges` found.
@@ -322,12 +363,11 @@ double mass_in(const T* p, std::span<const grid_box> boxes, Eigen::Index rows, E
   double sum = 0.0;
   for (Eigen::Index a = 0; a < layers; ++a)
     for (const grid_box& b : boxes)
-      for (Eigen::Index r = b.row; r < b.row + b.rows; ++r) {
-        const T* row = p + a * rows * cols + r * cols + b.col;
-        double s = 0.0;
-        for (Eigen::Index c = 0; c < b.cols; ++c) s += static_cast<double>(row[c]);
-        sum += s;
-      }
+      for (Eigen::Index r = b.row; r < b.row + b.rows; ++r)
+        sum += Eigen::Map<const Eigen::Array<T, Eigen::Dynamic, 1>>(
+                   p + a * rows * cols + r * cols + b.col, b.cols)
+                   .template cast<double>()
+                   .sum();
   return sum;
 }
 
