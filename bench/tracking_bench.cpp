@@ -287,14 +287,14 @@ BENCHMARK(plain_first_touch_tbb_2_threads)
 #endif
 BENCHMARK(plain_touch_full)->Unit(benchmark::kMicrosecond);
 BENCHMARK(plain_touch_tracked)->Unit(benchmark::kMicrosecond);
-BENCHMARK(plain_touch_tracked_noisy)->Arg(6)->Arg(9)->Arg(12)->Unit(benchmark::kMicrosecond);
+BENCHMARK(plain_touch_tracked_noisy)->Arg(6)->Arg(9)->Unit(benchmark::kMicrosecond);
 BENCHMARK(plain_predict)->Unit(benchmark::kMicrosecond);
 BENCHMARK(plain_predict_whole)->Unit(benchmark::kMicrosecond);
 BENCHMARK(plain_update_tracked)->Unit(benchmark::kMicrosecond);
 BENCHMARK(pose_first_touch)->Unit(benchmark::kMillisecond);
 BENCHMARK(pose_touch_full)->Unit(benchmark::kMicrosecond);
 BENCHMARK(pose_touch_tracked)->Unit(benchmark::kMicrosecond);
-BENCHMARK(pose_touch_tracked_noisy)->Arg(6)->Arg(9)->Arg(12)->Unit(benchmark::kMicrosecond);
+BENCHMARK(pose_touch_tracked_noisy)->Arg(6)->Arg(9)->Unit(benchmark::kMicrosecond);
 BENCHMARK(pose_predict)->Unit(benchmark::kMicrosecond);
 BENCHMARK(pose_update_tracked)->Unit(benchmark::kMicrosecond);
 BENCHMARK(latent_first_touch)->Unit(benchmark::kMillisecond);
