@@ -610,4 +610,47 @@ TEST_CASE("the region helpers: thresholds over ranges, clusters in disjoint boxe
   CHECK(sr.outside == doctest::Approx(in_region - in_s).epsilon(1e-5));
 }
 
+namespace {
+// A motion model that moves boxes as odometry_gaussian does, then breaks its contract: a NaN
+// in the first box.
+struct nan_boxes {
+  using control_type = tacmap::odometry;
+  tacmap::odometry_gaussian inner{{.sigma_mm = 0.3, .k = 8}};
+  template <class G>
+  tacmap::prediction_report predict(const G& g, const tacmap::belief_array<G>& in,
+                                    tacmap::belief_array<G>& out, const control_type& u) const {
+    return inner.predict(g, in, out, u);
+  }
+  template <class G>
+  bool predict_boxes(const G& g, tacmap::belief_array<G>& b,
+                     std::span<const tacmap::grid_box> boxes, const control_type& u,
+                     std::vector<tacmap::grid_box>& landed, double& dropped) const {
+    if (!inner.predict_boxes(g, b, boxes, u, landed, dropped)) return false;
+    b(boxes[0].row * g.cols() + boxes[0].col) = std::numeric_limits<float>::quiet_NaN();
+    return true;
+  }
+};
+static_assert(tacmap::moves_box<nan_boxes, grid_t>);
+}  // namespace
+
+TEST_CASE("a motion model whose predict_boxes breaks its contract: an error, never a NaN belief") {
+  const grid_t grid = test_grid();
+  tacmap::bayes_filter f(grid, nan_boxes{}, table_model{});
+  f.set_prior(blob(grid, {25, 30}, 1.5));
+  f.set_tracking({.epsilon = 1e-9});
+  table_model::measurement_type z{Eigen::ArrayXf(grid.size()), 0.0};
+  for (Eigen::Index i = 0; i < grid.size(); ++i) {
+    const auto c = grid.cell(i);
+    z.ll(i) = static_cast<float>(-0.1 * static_cast<double>((c.row - 25) * (c.row - 25) +
+                                                            (c.col - 30) * (c.col - 30)));
+  }
+  REQUIRE(f.update(z).path == update_path::tracked);
+  const std::string msg =
+      tacmap_test::message_of<std::logic_error>([&] { (void)f.predict({.dx_mm = 0.2}); });
+  CHECK(msg.find("predict_boxes") != std::string::npos);
+  CHECK(msg.find("reset to uniform") != std::string::npos);
+  CHECK(f.belief().allFinite());
+  CHECK(static_cast<double>(f.belief().sum()) == doctest::Approx(1.0).epsilon(1e-5));
+}
+
 }  // namespace test_tracking

@@ -508,7 +508,6 @@ class bayes_filter {
   std::optional<tracked_region> region_;
   std::vector<grid_box> landed_;           // predict_boxes' windows
   std::vector<state_range> candidates_;    // the region's states (tracked_update)
-  double moved_mass_ = 0.0;                // predict: the boxes' mass before they moved
   static constexpr std::size_t max_region_boxes = 32;
   [[nodiscard]] Eigen::Index layers() const { return grid_.size() / (grid_.rows() * grid_.cols()); }
   // Position statistics (coordinates cached once): one per object for library grids.
@@ -552,41 +551,50 @@ prediction_report bayes_filter<Grid, Motion, Measurement>::predict(const control
       for (const grid_box& b : boxes) area += static_cast<double>(b.rows * b.cols);
       return area <= tracking_.max_support * static_cast<double>(grid_.rows() * grid_.cols());
     };
-    double dropped = 0.0;
     if (region_ && !region_->moved && region_->outside <= tracking_.epsilon * (1.0 + 1e-4) &&
-        small(region_->boxes) &&
-        (moved_mass_ = detail::mass_in(belief_.data(), std::span<const grid_box>(region_->boxes),
-                                       grid_.rows(), grid_.cols(), layers()),
-         true) &&
-        motion_.predict_boxes(grid_, belief_, std::span<const grid_box>(region_->boxes), u,
-                              landed_, dropped)) {
-      // Where the mass now is: the windows, overlapping ones united (disjoint boxes, so that
-      // the next update counts each state once). The states outside them kept their values.
-      // The states of the new region that were outside the old boxes kept their values too:
-      // their mass leaves the outside's bound (in double over the region's few states; the
-      // moved mass is the boxes' less what was dropped, up to rounding).
-      const double before = moved_mass_;
-      region_->boxes = landed_;
-      detail::merge_boxes(region_->boxes, 0);
-      const double after = detail::mass_in(belief_.data(), std::span<const grid_box>(region_->boxes),
-                                           grid_.rows(), grid_.cols(), layers());
-      region_->outside =
-          std::max(0.0, region_->outside - std::max(0.0, after - (before - dropped)));
-      // Mass carried off the grid: `predict` renormalises every state; here the region's
-      // states take it back (the outside's share of it, at most its mass times the dropped
-      // fraction, is what the bound adds).
-      if (dropped > 0.0 && after > 0.0) {
-        const auto factor = static_cast<scalar_type>((after + dropped) / after);
-        for (const grid_box& b : region_->boxes)
-          for (Eigen::Index a = 0; a < layers(); ++a)
-            Eigen::Map<image<scalar_type>>(belief_.data() + a * grid_.rows() * grid_.cols(),
-                                           grid_.rows(), grid_.cols())
-                .block(b.row, b.col, b.rows, b.cols) *= factor;
+        small(region_->boxes)) {
+      const std::span<const grid_box> old(region_->boxes);
+      const double before = detail::mass_in(belief_.data(), old, grid_.rows(), grid_.cols(),
+                                            layers());
+      double dropped = 0.0;
+      if (motion_.predict_boxes(grid_, belief_, old, u, landed_, dropped)) {
+        // Where the mass now is: the windows, overlapping ones united (disjoint boxes, so that
+        // the next update counts each state once). The states outside them kept their values;
+        // so did the states of the new region that were outside the old boxes: their mass
+        // leaves the outside's bound (in double over the region's few states; the moved mass
+        // is the boxes' less what was dropped, up to rounding).
+        region_->boxes = landed_;
+        detail::merge_boxes(region_->boxes, 0);
+        const std::span<const grid_box> now(region_->boxes);
+        const double after =
+            detail::mass_in(belief_.data(), now, grid_.rows(), grid_.cols(), layers());
+        if (!(std::isfinite(after) && after >= 0.0 && std::isfinite(dropped) && dropped >= 0.0)) {
+          // A user's motion model that breaks its contract: the belief is already changed.
+          reset();
+          detail::fail<std::logic_error>(
+              "bayes_filter::predict: the motion model's predict_boxes left mass ", after,
+              " in its boxes and dropped ", dropped,
+              "; expected finite values >= 0. The belief was reset to uniform; check the "
+              "motion model");
+        }
+        region_->outside =
+            std::max(0.0, region_->outside - std::max(0.0, after - (before - dropped)));
+        // Mass carried off the grid: `predict` renormalises every state; here the region's
+        // states take it back (the outside's share of it, at most its mass times the dropped
+        // fraction, is what the bound adds).
+        if (dropped > 0.0 && after > 0.0) {
+          const auto factor = static_cast<scalar_type>((after + dropped) / after);
+          for (const grid_box& b : now)
+            for (Eigen::Index a = 0; a < layers(); ++a)
+              Eigen::Map<image<scalar_type>>(belief_.data() + a * grid_.rows() * grid_.cols(),
+                                             grid_.rows(), grid_.cols())
+                  .block(b.row, b.col, b.rows, b.cols) *= factor;
+        }
+        region_->moved = true;
+        return {.mass_lost = dropped,
+                .windowed = true,
+                .tracking_error_bound = region_->outside + dropped};
       }
-      region_->moved = true;
-      return {.mass_lost = dropped,
-              .windowed = true,
-              .tracking_error_bound = region_->outside + dropped};
     }
   }
   region_.reset();
