@@ -398,8 +398,8 @@ TEST_CASE("predict_box moves a box's mass as predict moves it, and drops what le
     REQUIRE(landed.size() == 1);
     CHECK(landed[0].col == 0);
     at_edge = p;
-    const tacmap::odometry_gaussian clamped({.sigma_mm = 0.5, .k = k,
-                                             .boundary = tacmap::off_grid::clamp});
+    const tacmap::odometry_gaussian clamped(
+        {.sigma_mm = 0.5, .k = k, .boundary = tacmap::off_grid::clamp});
     CHECK_FALSE(clamped.predict_box(grid, at_edge, box, off));
     CHECK_FALSE(motion.predict_box(grid, at_edge, box, tacmap::odometry{std::nan(""), 0.0}));
     CHECK((at_edge == p).all());
@@ -422,8 +422,8 @@ TEST_CASE("predict_box moves a box's mass as predict moves it, and drops what le
     motion.predict(grid, q, whole, u);
     std::vector<tacmap::grid_box> landed;
     double dropped = -1.0;
-    REQUIRE(motion.predict_boxes(grid, windowed, std::span<const tacmap::grid_box>(two), u,
-                                 landed, dropped));
+    REQUIRE(motion.predict_boxes(grid, windowed, std::span<const tacmap::grid_box>(two), u, landed,
+                                 dropped));
     CHECK(dropped == 0.0);
     CHECK((windowed - whole).abs().maxCoeff() <= 1e-6F * whole.maxCoeff());
     CHECK(landed.size() == 2);
@@ -604,8 +604,8 @@ TEST_CASE("the region helpers: thresholds over ranges, clusters in disjoint boxe
     CHECK(below[k] == doctest::Approx(expected).epsilon(1e-6));
   }
   std::vector<state_range> within;
-  const d::support_summary sr = d::support_ranges_on(
-      p.data(), std::span<const state_range>(region), t, p.size(), within);
+  const d::support_summary sr =
+      d::support_ranges_on(p.data(), std::span<const state_range>(region), t, p.size(), within);
   CHECK(within == support);  // every support state is in the region
   CHECK(sr.outside == doctest::Approx(in_region - in_s).epsilon(1e-5));
 }
@@ -641,8 +641,8 @@ TEST_CASE("a motion model whose predict_boxes breaks its contract: an error, nev
   table_model::measurement_type z{Eigen::ArrayXf(grid.size()), 0.0};
   for (Eigen::Index i = 0; i < grid.size(); ++i) {
     const auto c = grid.cell(i);
-    z.ll(i) = static_cast<float>(-0.1 * static_cast<double>((c.row - 25) * (c.row - 25) +
-                                                            (c.col - 30) * (c.col - 30)));
+    z.ll(i) = static_cast<float>(
+        -0.1 * static_cast<double>((c.row - 25) * (c.row - 25) + (c.col - 30) * (c.col - 30)));
   }
   REQUIRE(f.update(z).path == update_path::tracked);
   const std::string msg =

@@ -382,8 +382,7 @@ TEST_CASE("pose odometry: predict_boxes moves several boxes at once, overlapping
   Eigen::ArrayXd belief = inside;
   std::vector<tacmap::grid_box> landed;
   double dropped = -1.0;
-  REQUIRE(m.predict_boxes(g, belief, std::span<const tacmap::grid_box>(boxes), u, landed,
-                          dropped));
+  REQUIRE(m.predict_boxes(g, belief, std::span<const tacmap::grid_box>(boxes), u, landed, dropped));
   CHECK(dropped == 0.0);
   CHECK((belief - expected).abs().maxCoeff() <= 1e-12);
   REQUIRE(landed.size() == 2);
@@ -393,8 +392,8 @@ TEST_CASE("pose odometry: predict_boxes moves several boxes at once, overlapping
     const tacmap::grid_cell c = g.cell(i);
     bool in = false;
     for (const tacmap::grid_box& w : landed)
-      in = in || (c.row >= w.row && c.row < w.row + w.rows && c.col >= w.col &&
-                  c.col < w.col + w.cols);
+      in = in ||
+           (c.row >= w.row && c.row < w.row + w.rows && c.col >= w.col && c.col < w.col + w.cols);
     CHECK(in);
   }
 }
@@ -419,8 +418,8 @@ TEST_CASE("pose odometry: predict_box drops what leaves the grid, or refuses (cl
   Eigen::ArrayXd belief = inside;
   std::vector<tacmap::grid_box> landed;
   double dropped = 0.0;
-  REQUIRE(m.predict_boxes(g, belief, std::span<const tacmap::grid_box>(&box, 1), u, landed,
-                          dropped));
+  REQUIRE(
+      m.predict_boxes(g, belief, std::span<const tacmap::grid_box>(&box, 1), u, landed, dropped));
   CHECK(dropped == doctest::Approx(report.mass_lost).epsilon(1e-9));
   CHECK((belief - expected * (1.0 - dropped)).abs().maxCoeff() <= 1e-12);
   REQUIRE(landed.size() == 1);

@@ -176,7 +176,8 @@ TEST_CASE_TEMPLATE("the rotated model's tracking hook writes its full log-likeli
       {"tempering 0 (flat)", {.tempering = 0.0}},
       {"spacing 4 (more patches)", {.spacing = 4}},
       // The large-map rule forced on this small map: off-map means over a lattice sample.
-      {"off-map means on a lattice, aligned", {.off_map_exact_positions = 0, .off_map_sample = 200}},
+      {"off-map means on a lattice, aligned",
+       {.off_map_exact_positions = 0, .off_map_sample = 200}},
       {"off-map means on a lattice, all pairs",
        {.pairs = tacmap::pairing::all_pairs, .off_map_exact_positions = 0, .off_map_sample = 200}},
   };
@@ -210,8 +211,8 @@ TEST_CASE("off-map means on a lattice: only poses with a patch off the map chang
     // One patch's mean replaced by an estimate of it: within a few percent of the distance.
     CHECK(std::abs(ds(i) - de(i)) <= 0.05F * de(i));
   }
-  CHECK(changed > 0);                  // the rule ran
-  CHECK(changed < grid.size() / 2);    // ... only near the edges
+  CHECK(changed > 0);                // the rule ran
+  CHECK(changed < grid.size() / 2);  // ... only near the edges
   // Bad parameters are refused, naming them.
   CHECK_THROWS_WITH_AS(model_t(tacmap::classic_sift{}, map64(), grid, {.off_map_sample = 0}),
                        doctest::Contains("off_map_sample = 0"), std::invalid_argument);

@@ -506,8 +506,8 @@ class bayes_filter {
   tracking_params tracking_;
   std::vector<state_range> support_;  // tracking: the states evaluated
   std::optional<tracked_region> region_;
-  std::vector<grid_box> landed_;           // predict_boxes' windows
-  std::vector<state_range> candidates_;    // the region's states (tracked_update)
+  std::vector<grid_box> landed_;         // predict_boxes' windows
+  std::vector<state_range> candidates_;  // the region's states (tracked_update)
   static constexpr std::size_t max_region_boxes = 32;
   [[nodiscard]] Eigen::Index layers() const { return grid_.size() / (grid_.rows() * grid_.cols()); }
   // Position statistics (coordinates cached once): one per object for library grids.
@@ -554,8 +554,8 @@ prediction_report bayes_filter<Grid, Motion, Measurement>::predict(const control
     if (region_ && !region_->moved && region_->outside <= tracking_.epsilon * (1.0 + 1e-4) &&
         small(region_->boxes)) {
       const std::span<const grid_box> old(region_->boxes);
-      const double before = detail::mass_in(belief_.data(), old, grid_.rows(), grid_.cols(),
-                                            layers());
+      const double before =
+          detail::mass_in(belief_.data(), old, grid_.rows(), grid_.cols(), layers());
       double dropped = 0.0;
       if (motion_.predict_boxes(grid_, belief_, old, u, landed_, dropped)) {
         // Where the mass now is: the windows, overlapping ones united (disjoint boxes, so that
@@ -733,8 +733,7 @@ update_path bayes_filter<Grid, Motion, Measurement>::tracked_update(const measur
       scalar_type low = top;
       for (const state_range& r : in)
         low = std::min(low, log_likelihood_.segment(r.begin, r.end - r.begin).minCoeff());
-      const double outside_factor =
-          std::exp(static_cast<double>(low) - static_cast<double>(top));
+      const double outside_factor = std::exp(static_cast<double>(low) - static_cast<double>(top));
       const double total = sums.posterior + s.outside * outside_factor;
       const double inverse = 1.0 / total;
       if (!(inverse < static_cast<double>(std::numeric_limits<scalar_type>::max())))
@@ -759,8 +758,8 @@ update_path bayes_filter<Grid, Motion, Measurement>::tracked_update(const measur
           area <= tracking_.max_support * static_cast<double>(grid_.rows() * grid_.cols())) {
         detail::box_ranges(std::span<const grid_box>(boxes), grid_.rows(), grid_.cols(), layers(),
                            candidates_);
-        const double kept = detail::mass_outside_of(
-            belief_.data(), std::span<const state_range>(candidates_), in);
+        const double kept =
+            detail::mass_outside_of(belief_.data(), std::span<const state_range>(candidates_), in);
         region_ = tracked_region{std::move(boxes), std::max(0.0, outside_after - kept), false};
       }
     }

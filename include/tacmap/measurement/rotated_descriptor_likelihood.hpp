@@ -63,8 +63,8 @@ struct rotated_likelihood_params {
 
   void validate() const {
     if (off_map_exact_positions < 0 || off_map_sample < 1)
-      detail::fail("rotated_likelihood_params: off_map_exact_positions = ",
-                   off_map_exact_positions, ", off_map_sample = ", off_map_sample,
+      detail::fail("rotated_likelihood_params: off_map_exact_positions = ", off_map_exact_positions,
+                   ", off_map_sample = ", off_map_sample,
                    "; expected >= 0 and >= 1 (the defaults are 16384 and 4096)");
     descriptor_likelihood_params p;
     p.spacing = spacing;
@@ -707,6 +707,21 @@ class rotated_descriptor_likelihood {
     return r.rows > 0 && r.cols > 0 && (r.rows < rows_ || r.cols < cols_);
   }
 
+  // tactile_'s columns `columns` (and their norms_) side by side, in that order: the
+  // descriptors an off-map pass meets the field with.
+  void gather_columns(const std::vector<Eigen::Index>& columns,
+                      Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic>& g,
+                      std::vector<scalar_type>& norms) const {
+    const auto count = static_cast<Eigen::Index>(columns.size());
+    g.resize(tactile_.rows(), count);
+    norms.resize(static_cast<std::size_t>(count));
+    for (Eigen::Index j = 0; j < count; ++j) {
+      const auto c = static_cast<std::size_t>(columns[static_cast<std::size_t>(j)]);
+      g.col(j) = tactile_.col(static_cast<Eigen::Index>(c));
+      norms[static_cast<std::size_t>(j)] = norms_[c];
+    }
+  }
+
   // means_[a M + m] for every off_ patch, over the lattice sample: the patch's distances (all
   // pairs: its heading's summed distance) at the sample positions inside the field rectangle
   // it reads, averaged in double; a rectangle holding no sample position takes the mean over
@@ -728,8 +743,9 @@ class rotated_descriptor_likelihood {
       for (Eigen::Index m = 0; m < m_count_; ++m) {
         if (off_[static_cast<std::size_t>(a * m_count_ + m)] == 0) continue;
         any = true;
-        items.push_back({a, m, summed ? static_cast<Eigen::Index>(columns.size()) / group
-                                      : static_cast<Eigen::Index>(columns.size())});
+        items.push_back({a, m,
+                         summed ? static_cast<Eigen::Index>(columns.size()) / group
+                                : static_cast<Eigen::Index>(columns.size())});
         if (!summed) columns.push_back(column(a, m));
       }
       if (summed && any)
@@ -737,13 +753,9 @@ class rotated_descriptor_likelihood {
     }
     if (items.empty()) return;
     const auto count = static_cast<Eigen::Index>(columns.size());
-    Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g(tactile_.rows(), count);
-    std::vector<scalar_type> norms(static_cast<std::size_t>(count));
-    for (Eigen::Index j = 0; j < count; ++j) {
-      g.col(j) = tactile_.col(columns[static_cast<std::size_t>(j)]);
-      norms[static_cast<std::size_t>(j)] =
-          norms_[static_cast<std::size_t>(columns[static_cast<std::size_t>(j)])];
-    }
+    Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g;
+    std::vector<scalar_type> norms;
+    gather_columns(columns, g, norms);
     constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
     const Eigen::Index k_count = sample_tiles_.positions();
     const Eigen::Index padded = (k_count + width - 1) / width * width;
@@ -840,13 +852,9 @@ class rotated_descriptor_likelihood {
     }
     if (items.empty()) return;
     const auto count = static_cast<Eigen::Index>(columns.size());
-    Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g(tactile_.rows(), count);
-    std::vector<scalar_type> norms(static_cast<std::size_t>(count));
-    for (Eigen::Index j = 0; j < count; ++j) {
-      g.col(j) = tactile_.col(columns[static_cast<std::size_t>(j)]);
-      norms[static_cast<std::size_t>(j)] =
-          norms_[static_cast<std::size_t>(columns[static_cast<std::size_t>(j)])];
-    }
+    Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g;
+    std::vector<scalar_type> norms;
+    gather_columns(columns, g, norms);
     constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
     const Eigen::Index positions = field_rows_ * field_cols_;
     Eigen::Index lo = positions, hi = 0;

@@ -246,7 +246,8 @@ class odometry_gaussian {
       const grid_box w{box.row - pad + static_cast<Eigen::Index>(fy_floor),
                        box.col - pad + static_cast<Eigen::Index>(fx_floor), box.rows + 2 * pad,
                        box.cols + 2 * pad};
-      const bool inside = w.row >= 0 && w.col >= 0 && w.row + w.rows <= rows && w.col + w.cols <= cols;
+      const bool inside =
+          w.row >= 0 && w.col >= 0 && w.row + w.rows <= rows && w.col + w.cols <= cols;
       if (!inside && params_.boundary == off_grid::clamp) return false;
       if (w.row + w.rows <= 0 || w.col + w.cols <= 0 || w.row >= rows || w.col >= cols)
         return false;

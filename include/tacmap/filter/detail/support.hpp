@@ -23,77 +23,10 @@ namespace tacmap::detail {
 /// is < n * epsilon / n = epsilon whatever the belief) and the belief's maximum.
 inline constexpr std::size_t support_candidates = 16;
 
-/// mass[k] = sum of the p(i) < t[k] (one pass, every candidate at once). Float lanes summed over
-/// blocks of 1024 states, then in double: the sums of small masses keep ~1e-6 relative error.
-template <class T>
-std::array<double, support_candidates> mass_below(const T* p, Eigen::Index n,
-                                                  const std::array<T, support_candidates>& t) {
-  using batch = xsimd::batch<T, kernel_arch<T>>;
-  constexpr auto width = static_cast<Eigen::Index>(batch::size);
-  constexpr std::size_t K = support_candidates;
-  std::array<double, K> out{};
-  std::array<batch, K> tb;
-  for (std::size_t k = 0; k < K; ++k) tb[k] = batch(t[k]);
-  const Eigen::Index vec_end = n - n % width;
-  constexpr Eigen::Index block = 1024;
-  for (Eigen::Index b0 = 0; b0 < vec_end; b0 += block) {
-    std::array<batch, K> acc;
-    acc.fill(batch(T(0)));
-    const Eigen::Index b1 = std::min(vec_end, b0 + block);
-    batch everywhere(T(0));  // states below the lowest candidate: below every candidate
-    for (Eigen::Index i = b0; i < b1; i += width) {
-      const batch v = batch::load_unaligned(p + i);
-      // A concentrated belief is below the lowest candidate almost everywhere: one compare.
-      if (xsimd::none(v >= tb[0])) {
-        everywhere += v;
-        continue;
-      }
-      for (std::size_t k = 0; k < K; ++k) acc[k] += xsimd::select(v < tb[k], v, batch(T(0)));
-    }
-    const auto common = static_cast<double>(xsimd::hadd(everywhere));
-    for (std::size_t k = 0; k < K; ++k) out[k] += common + static_cast<double>(xsimd::hadd(acc[k]));
-  }
-  for (Eigen::Index i = vec_end; i < n; ++i)
-    for (std::size_t k = 0; k < K; ++k)
-      if (p[i] < t[k]) out[k] += static_cast<double>(p[i]);
-  return out;
-}
-
-/// The geometric candidate thresholds between epsilon / n and 1 (see `support_threshold`).
-template <class T>
-std::array<T, support_candidates> support_candidate_thresholds(Eigen::Index n, double epsilon) {
-  constexpr std::size_t K = support_candidates;
-  const double lo = epsilon / static_cast<double>(std::max<Eigen::Index>(n, 1));
-  const double hi = std::max(1.0, lo);
-  const double ratio = std::pow(hi / lo, 1.0 / static_cast<double>(K - 1));
-  std::array<T, K> t{};
-  for (std::size_t k = 0; k < K; ++k)
-    t[k] = static_cast<T>(lo * std::pow(ratio, static_cast<double>(k)));
-  return t;
-}
-
-/// The largest candidate threshold whose mass below is <= epsilon.
-template <class T>
-T best_threshold(const std::array<T, support_candidates>& t,
-                 const std::array<double, support_candidates>& below, double epsilon) {
-  T best = t[0];
-  for (std::size_t k = 1; k < support_candidates; ++k)
-    if (below[k] <= epsilon) best = t[k];
-  return best;
-}
-
-/// The largest candidate threshold t whose mass below is <= epsilon (see `mass_below`); the
-/// support {p >= t} then holds >= 1 - epsilon of the mass. Candidates are geometric between
-/// epsilon / n and 1: within a factor (n / epsilon)^(1/15) (5.8 for 547,000 states and 1e-6)
-/// of the exact threshold of the smallest such set.
-template <class T>
-T support_threshold(const T* p, Eigen::Index n, double epsilon) {
-  const auto t = support_candidate_thresholds<T>(n, epsilon);
-  return best_threshold(t, mass_below(p, n, t), epsilon);
-}
-
-/// `mass_below` over the states of `ranges` (sorted, disjoint). The lanes carry on from one
-/// range to the next (a region's ranges are box rows of a few dozen states: reducing every
+/// mass[k] = sum of the p(i) < t[k] over the states of `ranges` (sorted, disjoint): one pass,
+/// every candidate at once. Float lanes summed over blocks of 1024 states, then in double: the
+/// sums of small masses keep ~1e-6 relative error. The lanes carry on from one range to the
+/// next (a region's ranges are box rows of a few dozen states: reducing every
 /// candidate's lanes per range cost more than the comparisons), flushed to double every 1024
 /// states.
 template <class T>
@@ -138,6 +71,47 @@ std::array<double, support_candidates> mass_below_on(const T* p,
   return out;
 }
 
+/// `mass_below_on` over the states [0, n).
+template <class T>
+std::array<double, support_candidates> mass_below(const T* p, Eigen::Index n,
+                                                  const std::array<T, support_candidates>& t) {
+  const state_range all{0, n};
+  return mass_below_on(p, std::span<const state_range>(&all, 1), t);
+}
+
+/// The geometric candidate thresholds between epsilon / n and 1 (see `support_threshold`).
+template <class T>
+std::array<T, support_candidates> support_candidate_thresholds(Eigen::Index n, double epsilon) {
+  constexpr std::size_t K = support_candidates;
+  const double lo = epsilon / static_cast<double>(std::max<Eigen::Index>(n, 1));
+  const double hi = std::max(1.0, lo);
+  const double ratio = std::pow(hi / lo, 1.0 / static_cast<double>(K - 1));
+  std::array<T, K> t{};
+  for (std::size_t k = 0; k < K; ++k)
+    t[k] = static_cast<T>(lo * std::pow(ratio, static_cast<double>(k)));
+  return t;
+}
+
+/// The largest candidate threshold whose mass below is <= epsilon.
+template <class T>
+T best_threshold(const std::array<T, support_candidates>& t,
+                 const std::array<double, support_candidates>& below, double epsilon) {
+  T best = t[0];
+  for (std::size_t k = 1; k < support_candidates; ++k)
+    if (below[k] <= epsilon) best = t[k];
+  return best;
+}
+
+/// The largest candidate threshold t whose mass below is <= epsilon (see `mass_below`); the
+/// support {p >= t} then holds >= 1 - epsilon of the mass. Candidates are geometric between
+/// epsilon / n and 1: within a factor (n / epsilon)^(1/15) (5.8 for 547,000 states and 1e-6)
+/// of the exact threshold of the smallest such set.
+template <class T>
+T support_threshold(const T* p, Eigen::Index n, double epsilon) {
+  const auto t = support_candidate_thresholds<T>(n, epsilon);
+  return best_threshold(t, mass_below(p, n, t), epsilon);
+}
+
 /// `support_threshold` over the states of `ranges` only (sorted, disjoint): the largest
 /// candidate whose mass below, among those states, is <= epsilon.
 template <class T>
@@ -159,8 +133,8 @@ struct support_summary {
 /// that continues the last one extends it), their count and the others' mass added to `s`.
 /// Stops (too_wide) as soon as more than `max_states` states are in.
 template <class T>
-void append_support(const T* p, Eigen::Index begin, Eigen::Index end, T t,
-                    Eigen::Index max_states, std::vector<state_range>& out, support_summary& s) {
+void append_support(const T* p, Eigen::Index begin, Eigen::Index end, T t, Eigen::Index max_states,
+                    std::vector<state_range>& out, support_summary& s) {
   using batch = xsimd::batch<T, kernel_arch<T>>;
   constexpr auto width = static_cast<Eigen::Index>(batch::size);
   const batch tb(t);
@@ -339,8 +313,7 @@ inline void box_ranges(std::span<const grid_box> boxes, Eigen::Index rows, Eigen
 
 /// Sum of p over the states of `a` that are not in `b` (both sorted, disjoint), in double.
 template <class T>
-double mass_outside_of(const T* p, std::span<const state_range> a,
-                       std::span<const state_range> b) {
+double mass_outside_of(const T* p, std::span<const state_range> a, std::span<const state_range> b) {
   double sum = 0.0;
   std::size_t j = 0;
   for (const state_range& r : a) {
