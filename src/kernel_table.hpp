@@ -22,7 +22,8 @@ constexpr precompiled_kernels make_kernels(simd_level level) {
           &weighted_sum_simd<A, float>,
           &accumulate_sign_pair_tiles_simd<A, float>,
           &accumulate_distances_tiles_simd<A, float>,
-          &quantized_distances_simd<A>};
+          &quantized_distances_simd<A>,
+          &quantize_columns_simd<A>};
 }
 
 /// The AVX2 + FMA table (src/simd_avx2.cpp, compiled with -mavx2 -mfma).

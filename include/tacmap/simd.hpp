@@ -71,6 +71,8 @@ struct position_range;
 struct tile_range;
 class quantized_tiles;
 struct quantized_query;
+struct quantized_store;
+struct quantize_report;
 
 /// The float kernels of one instruction set in tacmap::precompiled (src/simd_*.cpp): the same
 /// templates as the header-only kernels, instantiated for that architecture.
@@ -100,6 +102,9 @@ struct precompiled_kernels {
   /// Distances to descriptors stored as 7-bit integers (quantized_kernel.hpp; issue 14).
   void (*quantized_distances)(const quantized_tiles& f, const quantized_query& g, float* const* out,
                               bool sum, bool add, tile_range range);
+  /// A map's descriptors quantised to 7 bits (map preparation; quantized_kernel.hpp).
+  quantize_report (*quantize_columns)(const float* src, Eigen::Index stride, Eigen::Index n,
+                                      Eigen::Index dim, quantized_store out, Eigen::Index q0);
 };
 
 // Defined in tacmap::precompiled (src/simd_dispatch.cpp); declared for every translation unit,

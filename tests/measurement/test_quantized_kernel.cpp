@@ -194,46 +194,104 @@ TEST_CASE("quantize: clamps are counted, never NaN or an out-of-range byte") {
 }
 
 TEST_CASE("quantized_tiles::set_columns stores what quantize gives, element for element") {
-  // set_columns quantises a column at a time with vectorised expressions; quantize is the
+  // set_columns quantises whole batches in registers (quantize_columns_simd); quantize is the
   // scalar definition. Every rounding tie k + 0.5, its neighbours one ulp away, the clamp's
-  // edges, NaN, infinity, zero and denormals, in columns of a dimension that is not a multiple
-  // of the 4-byte groups.
+  // edges, NaN, infinity, zero and denormals; dimensions with and without a remainder past the
+  // batches and the 4-byte groups; every kernel the build has; float columns in place (with an
+  // outer stride) and double columns through the copy.
   using tacmap::detail::quantization_scale;
   using tacmap::detail::quantize;
-  std::vector<float> values;
+  using tacmap::detail::quantize_report;
+  using tacmap::detail::quantized_store;
+  std::vector<float> base;
   for (int k = 0; k <= 130; ++k) {
     const float tie = (static_cast<float>(k) + 0.5F) / quantization_scale;
-    values.insert(values.end(), {tie, std::nextafter(tie, 0.0F), std::nextafter(tie, 2.0F),
-                                 static_cast<float>(k) / quantization_scale});
+    base.insert(base.end(), {tie, std::nextafter(tie, 0.0F), std::nextafter(tie, 2.0F),
+                             static_cast<float>(k) / quantization_scale});
   }
-  values.insert(values.end(),
-                {0.0F, -0.0F, std::numeric_limits<float>::denorm_min(), 0.5F, 0.501F, 0.51F, 1.0F,
-                 std::numeric_limits<float>::max(), std::numeric_limits<float>::infinity(),
-                 std::numeric_limits<float>::quiet_NaN()});
-  const Eigen::Index dim = 7;
-  const auto n = static_cast<Eigen::Index>((values.size() + dim - 1) / dim);
-  values.resize(static_cast<std::size_t>(n * dim), 0.25F);
-  const Eigen::Map<const Eigen::ArrayXXf> columns(values.data(), dim, n);
-  quantized_tiles tiles(n + 3, dim);
-  REQUIRE(tiles.set_columns(3, columns));
-  std::uint64_t clamped = 0;
-  for (Eigen::Index q = 0; q < n; ++q) {
-    std::int32_t norm = 0;
-    for (Eigen::Index k = 0; k < dim; ++k) {
-      const auto expected = quantize(columns(k, q), 0);
-      CAPTURE(columns(k, q));
-      CHECK(tiles.at(3 + q, k) == expected.value);
-      clamped += expected.clamped ? 1U : 0U;
-      norm += expected.value * expected.value;
+  base.insert(base.end(),
+              {0.0F, -0.0F, std::numeric_limits<float>::denorm_min(), 0.5F, 0.501F, 0.51F, 1.0F,
+               std::numeric_limits<float>::max(), std::numeric_limits<float>::infinity(),
+               std::numeric_limits<float>::quiet_NaN()});
+  using kernel = quantize_report (*)(const float*, Eigen::Index, Eigen::Index, Eigen::Index,
+                                     quantized_store, Eigen::Index);
+  std::vector<std::pair<const char*, kernel>> kernels = {
+      {"scalar", &tacmap::detail::quantize_columns_scalar},
+      {"compile-time arch",
+       &tacmap::detail::quantize_columns_simd<tacmap::detail::kernel_arch<float>>}};
+#if defined(__SSE2__)
+  kernels.emplace_back("sse2", &tacmap::detail::quantize_columns_simd<xsimd::sse2>);
+#endif
+#if defined(TACMAP_PRECOMPILED) && TACMAP_PRECOMPILED
+  for (const auto level : {tacmap::simd_level::sse2, tacmap::simd_level::avx2_fma})
+    if (const auto* k = tacmap::detail::kernels_for(level))
+      kernels.emplace_back("precompiled", k->quantize_columns);
+#endif
+  for (const Eigen::Index dim : {1, 7, 8, 12, 13, 32, 128}) {
+    CAPTURE(dim);
+    const auto size = static_cast<Eigen::Index>(base.size());
+    const Eigen::Index n = (size + dim - 1) / dim;
+    std::vector<float> values = base;
+    values.resize(static_cast<std::size_t>(n * dim), 0.25F);
+    // Columns stored dim + 3 apart (an outer stride), the gaps filled with values that would
+    // be refused (negative) if they were read.
+    const Eigen::Index stride = dim + 3;
+    std::vector<float> strided(static_cast<std::size_t>(n * stride), -1.0F);
+    for (Eigen::Index q = 0; q < n; ++q)
+      for (Eigen::Index k = 0; k < dim; ++k)
+        strided[static_cast<std::size_t>(q * stride + k)] =
+            values[static_cast<std::size_t>(q * dim + k)];
+    const Eigen::Map<const Eigen::ArrayXXf, 0, Eigen::OuterStride<>> columns(
+        strided.data(), dim, n, Eigen::OuterStride<>(stride));
+    const auto check = [&](const quantized_tiles& tiles, std::uint64_t clamped_seen) {
+      std::uint64_t clamped = 0;
+      for (Eigen::Index q = 0; q < n; ++q) {
+        std::int32_t norm = 0;
+        for (Eigen::Index k = 0; k < dim; ++k) {
+          const auto expected = quantize(columns(k, q), 0);
+          CAPTURE(columns(k, q));
+          REQUIRE(tiles.at(3 + q, k) == expected.value);
+          clamped += expected.clamped ? 1U : 0U;
+          norm += expected.value * expected.value;
+        }
+        for (Eigen::Index k = dim; k < tiles.rows() * quantized_tiles::group; ++k)
+          REQUIRE(tiles.at(3 + q, k) == 0);  // the last group's padding
+        REQUIRE(*tiles.squared_norms_from(3 + q) == norm);
+      }
+      CHECK(clamped_seen == clamped);
+    };
+    {
+      quantized_tiles tiles(n + 3, dim);
+      REQUIRE(tiles.set_columns(3, columns));
+      check(tiles, tiles.clamped());
+      quantized_tiles from_double(n + 3, dim);  // the copy path
+      REQUIRE(from_double.set_columns(3, columns.cast<double>()));
+      check(from_double, from_double.clamped());
     }
-    CHECK(*tiles.squared_norms_from(3 + q) == norm);
+    for (const auto& [name, k] : kernels) {
+      CAPTURE(name);
+      // Tiles filled with garbage first: every byte of the positions set must be written.
+      quantized_tiles tiles(n + 3, dim);
+      REQUIRE(tiles.set_columns(0, Eigen::ArrayXXf::Constant(dim, n + 3, 0.3F)));
+      const quantize_report report = k(strided.data(), stride, n, dim, tiles.store(), 3);
+      CHECK_FALSE(report.negative);
+      check(tiles, report.clamped);
+    }
   }
-  CHECK(tiles.clamped() == clamped);
-  // A negative element anywhere in a column is refused.
-  Eigen::ArrayXXf negative = Eigen::ArrayXXf::Constant(dim, 2, 0.1F);
-  negative(6, 1) = -1e-30F;
-  quantized_tiles refused(2, dim);
-  CHECK_FALSE(refused.set_columns(0, negative));
+  // A negative element anywhere in a column is refused, by every kernel.
+  for (const Eigen::Index dim : {7, 8, 128}) {
+    for (const Eigen::Index at : {Eigen::Index{0}, dim - 1}) {
+      Eigen::ArrayXXf negative = Eigen::ArrayXXf::Constant(dim, 2, 0.1F);
+      negative(at, 1) = -1e-30F;
+      quantized_tiles refused(2, dim);
+      CHECK_FALSE(refused.set_columns(0, negative));
+      for (const auto& [name, k] : kernels) {
+        CAPTURE(name);
+        quantized_tiles tiles(2, dim);
+        CHECK(k(negative.data(), dim, 2, dim, tiles.store(), 0).negative);
+      }
+    }
+  }
 }
 
 }  // namespace test_quantized_kernel

@@ -35,6 +35,8 @@
 
 #if defined(__AVX2__)
 #include <immintrin.h>
+#elif defined(__SSE2__)
+#include <emmintrin.h>
 #endif
 
 #include "tacmap/config.hpp"
@@ -63,6 +65,29 @@ struct quantized_value {
   return {static_cast<std::int32_t>(std::lround(x)), false};
 }
 
+/// Where `quantize_columns` writes: `quantized_tiles`' layout (tiles of 8 positions, `rows`
+/// 32-byte rows each) and the squared norms, one per position.
+struct quantized_store {
+  std::uint8_t* data = nullptr;
+  std::int32_t* norms = nullptr;
+  Eigen::Index rows = 0;
+};
+
+/// What `quantize_columns` did: the elements clamped at 127 (NaN counted, stored as 0), and
+/// whether it stopped at a column with a negative element.
+struct quantize_report {
+  std::uint64_t clamped = 0;
+  bool negative = false;
+};
+
+/// `quantize(v, 0)` of every element of `n` float columns of `dim` elements (column j at
+/// `src + j * stride`), stored as positions q0 .. q0 + n - 1 of `out` with their squared norms
+/// (groups past `dim` are zeros). Stops at the first column with a negative element (reported;
+/// that column may be stored in part). Defined below; the kernel of the CPU's level with
+/// tacmap::precompiled.
+inline quantize_report quantize_columns(const float* src, Eigen::Index stride, Eigen::Index n,
+                                        Eigen::Index dim, quantized_store out, Eigen::Index q0);
+
 /// Descriptors of `positions` positions as 7-bit integers, tiled for `quantized_distances`.
 class quantized_tiles {
  public:
@@ -80,42 +105,31 @@ class quantized_tiles {
   }
   /// Quantises and stores descriptors `columns` (dimension x n) at positions q0 .. q0 + n - 1.
   /// Elements above the range are clamped at 127 and counted (`clamped`); a negative element
-  /// is refused (returns false and stores nothing more): the map side is unsigned.
+  /// is refused (returns false, and the tiles are left part-written: discard them): the map
+  /// side is unsigned.
   template <class Derived>
   [[nodiscard]] bool set_columns(Eigen::Index q0, const Eigen::DenseBase<Derived>& columns) {
-    // A column at a time through contiguous scratch: the conversion loop then vectorises, and
-    // each group of 4 bytes is stored as one word (the tile's rows are 32 bytes apart).
-    values_.resize(static_cast<std::size_t>(rows_ * group));
-    codes_.assign(static_cast<std::size_t>(rows_ * group), 0);
-    for (Eigen::Index j = 0; j < columns.cols(); ++j) {
-      const Eigen::Index q = q0 + j;
-      // `quantize(v, 0)` as whole-column Eigen expressions (vectorised: 30 -> 11-14 ms of CPU
-      // for a 120 px map's 3 million elements, issue 14; a branch-free scalar loop measured
-      // 21 ms). The tests compare it with the scalar function.
-      Eigen::Map<Eigen::ArrayXf> x(values_.data(), dim_);
-      x = columns.col(j).template cast<float>() * quantization_scale;
-      if ((x < 0.0F).any()) return false;
-      Eigen::Map<Eigen::ArrayXi> code(codes_.data(), dim_);
-      const auto clamped =
-          static_cast<std::uint64_t>((x >= 127.5F || x != x).count());  // x != x: NaN
-      x = (x >= 0.0F).select(x.min(127.0F), 0.0F);                      // NaN -> 0
-      code = x.cast<std::int32_t>();                                    // trunc = floor
-      code += (x - code.cast<float>() >= 0.5F).cast<std::int32_t>();
-      const std::int32_t norm = code.square().sum();
-      const std::int32_t* c = codes_.data();
-      std::uint8_t* lane = data_.data() + (q / width) * rows_ * row_bytes + (q % width) * group;
-      for (Eigen::Index r = 0; r < rows_; ++r) {
-        const std::int32_t* g = c + r * group;  // past dim_: zeros (codes_ is zero-filled)
-        const std::uint8_t bytes[group] = {
-            static_cast<std::uint8_t>(g[0]), static_cast<std::uint8_t>(g[1]),
-            static_cast<std::uint8_t>(g[2]), static_cast<std::uint8_t>(g[3])};
-        std::memcpy(lane + r * row_bytes, bytes, group);
-      }
-      clamped_ += clamped;
-      norms_[static_cast<std::size_t>(q)] = norm;
+    TACMAP_ASSERT(columns.rows() == dim_ && q0 >= 0 && q0 + columns.cols() <= positions_,
+                  "quantized_tiles::set_columns: columns outside the tiles");
+    const quantized_store out = store();
+    quantize_report report;
+    using plain = std::decay_t<decltype(columns.derived())>;
+    if constexpr (std::is_same_v<typename Derived::Scalar, float> &&
+                  (static_cast<unsigned>(plain::Flags) & Eigen::DirectAccessBit) != 0 &&
+                  !static_cast<bool>(plain::IsRowMajor)) {
+      // Contiguous float columns (the map's blocks): straight from their storage.
+      if (columns.rows() > 1 && columns.derived().innerStride() != 1)
+        return copy_and_set(q0, columns);
+      report = quantize_columns(columns.derived().data(), columns.derived().outerStride(),
+                                columns.cols(), dim_, out, q0);
+    } else {
+      return copy_and_set(q0, columns);
     }
-    return true;
+    clamped_ += report.clamped;
+    return !report.negative;
   }
+  /// Where `quantize_columns` writes into these tiles (for the kernels and their tests).
+  [[nodiscard]] quantized_store store() { return {data_.data(), norms_.data(), rows_}; }
   /// Element k of position q (an integer in [0, 127]).
   [[nodiscard]] std::int32_t at(Eigen::Index q, Eigen::Index k) const {
     return data_[static_cast<std::size_t>((q / width) * rows_ * row_bytes +
@@ -148,9 +162,17 @@ class quantized_tiles {
   Eigen::Index dim_ = 0;
   Eigen::Index rows_ = 0;
   std::uint64_t clamped_ = 0;
-  // set_columns' scratch: one column as floats and as codes (rows_ * group, zero past dim_).
-  std::vector<float> values_;
-  std::vector<std::int32_t> codes_;
+  // Other expressions and scalars (double descriptors): as a float matrix first.
+  template <class Derived>
+  [[nodiscard]] bool copy_and_set(Eigen::Index q0, const Eigen::DenseBase<Derived>& columns) {
+    values_ = columns.template cast<float>();
+    const quantize_report report =
+        quantize_columns(values_.data(), values_.rows(), values_.cols(), dim_, store(), q0);
+    clamped_ += report.clamped;
+    return !report.negative;
+  }
+
+  Eigen::ArrayXXf values_;  // copy_and_set's scratch
   // 64-byte aligned: the AVX2 kernel loads whole rows aligned.
   std::vector<std::uint8_t, xsimd::aligned_allocator<std::uint8_t, 64>> data_;
   std::vector<std::int32_t, xsimd::aligned_allocator<std::int32_t, 64>> norms_;
@@ -418,6 +440,143 @@ void tiles(const quantized_tiles& f, const quantized_query& g, Eigen::Index j0, 
 }
 
 }  // namespace quantized_kernel
+
+/// `quantize_columns`' plain reference: `quantize(v, 0)` element by element.
+inline quantize_report quantize_columns_scalar(const float* src, Eigen::Index stride,
+                                               Eigen::Index n, Eigen::Index dim,
+                                               quantized_store out, Eigen::Index q0) {
+  quantize_report report;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const float* x = src + j * stride;
+    const Eigen::Index q = q0 + j;
+    std::uint8_t* lane = out.data + (q / quantized_tiles::width) * out.rows * 32 +
+                         (q % quantized_tiles::width) * quantized_tiles::group;
+    std::int32_t norm = 0;
+    for (Eigen::Index k = 0; k < out.rows * quantized_tiles::group; ++k) {
+      quantized_value c;
+      if (k < dim) {
+        if (x[k] < 0.0F) {
+          report.negative = true;
+          return report;
+        }
+        c = quantize(x[k], 0);
+      }
+      report.clamped += c.clamped ? 1U : 0U;
+      norm += c.value * c.value;
+      lane[(k / quantized_tiles::group) * quantized_tiles::row_bytes + k % quantized_tiles::group] =
+          static_cast<std::uint8_t>(c.value);
+    }
+    out.norms[q] = norm;
+  }
+  return report;
+}
+
+namespace quantized_kernel {
+
+// Stores the codes of one batch (whole 4-element groups, integers in [0, 127]) as the bytes of
+// consecutive 32-byte rows from `at`: packed in registers on SSE2 and AVX2.
+template <class A>
+void store_groups(const xsimd::batch<std::int32_t, A>& codes, std::uint8_t* at) {
+  constexpr std::size_t size = xsimd::batch<std::int32_t, A>::size;
+#if defined(__AVX2__)
+  if constexpr (uses_avx2<A>()) {
+    // Packs stay within 128-bit lanes: bytes 0-3 of each lane are that lane's 4 codes.
+    const __m256i c = codes;
+    const __m256i bytes = _mm256_packus_epi16(_mm256_packs_epi32(c, c), c);
+    const std::int32_t low = _mm256_cvtsi256_si32(bytes);
+    const std::int32_t high = _mm256_extract_epi32(bytes, 4);
+    std::memcpy(at, &low, 4);
+    std::memcpy(at + quantized_tiles::row_bytes, &high, 4);
+    return;
+  }
+#endif
+#if defined(__SSE2__)
+  if constexpr (std::is_base_of_v<xsimd::sse2, A> && size == 4) {
+    const __m128i c = codes;
+    const std::int32_t word = _mm_cvtsi128_si32(_mm_packus_epi16(_mm_packs_epi32(c, c), c));
+    std::memcpy(at, &word, 4);
+    return;
+  }
+#endif
+  alignas(64) std::int32_t v[size];
+  codes.store_aligned(v);
+  for (std::size_t e = 0; e < size; ++e)
+    at[(e / 4) * quantized_tiles::row_bytes + e % 4] = static_cast<std::uint8_t>(v[e]);
+}
+
+}  // namespace quantized_kernel
+
+/// `quantize_columns` on architecture A: whole batches of a column in registers, the rest by
+/// the scalar rule. The same integers as the reference (tested at every rounding tie): the
+/// value is clamped to [0, 127] first (a NaN becomes 0), truncated, and rounded up where the
+/// remainder (exact: both below 2^24) is at least 0.5, which is std::lround on [0, 127].
+/// Counts and squared norms are summed as floats: integers below 2^24, so exact.
+template <class A>
+quantize_report quantize_columns_simd(const float* src, Eigen::Index stride, Eigen::Index n,
+                                      Eigen::Index dim, quantized_store out, Eigen::Index q0) {
+  using batch = xsimd::batch<float, A>;
+  constexpr auto size = static_cast<Eigen::Index>(batch::size);
+  if constexpr (size % quantized_tiles::group != 0) {
+    return quantize_columns_scalar(src, stride, n, dim, out, q0);
+  } else {
+    quantize_report report;
+    const Eigen::Index whole = dim / size * size;
+    const batch scale(quantization_scale), top(127.0F), half(0.5F), one(1.0F), zero(0.0F);
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const float* x = src + j * stride;
+      const Eigen::Index q = q0 + j;
+      std::uint8_t* lane = out.data + (q / quantized_tiles::width) * out.rows * 32 +
+                           (q % quantized_tiles::width) * quantized_tiles::group;
+      auto negative = batch(0.0F) != batch(0.0F);
+      batch clamped(0.0F), norm(0.0F);
+      for (Eigen::Index k = 0; k < whole; k += size) {
+        const batch v = batch::load_unaligned(x + k) * scale;
+        negative = negative | (v < zero);
+        // Clamped: at least 127.5, or NaN (ordered compare: false for NaN; `v != v` is not
+        // portable here, AVX's _CMP_NEQ_OQ is false for NaN).
+        clamped += xsimd::select(v < batch(127.5F), zero, one);
+        const batch y = xsimd::select(v >= zero, xsimd::min(v, top), zero);
+        const batch t = xsimd::to_float(xsimd::to_int(y));  // truncation
+        const batch code = t + xsimd::select(y - t >= half, one, zero);
+        norm = xsimd::fma(code, code, norm);
+        quantized_kernel::store_groups<A>(
+            xsimd::to_int(code), lane + (k / quantized_tiles::group) * quantized_tiles::row_bytes);
+      }
+      if (xsimd::any(negative)) {
+        report.negative = true;
+        return report;
+      }
+      // The rest of the column and the zero padding of its last group.
+      std::int32_t rest_norm = 0;
+      for (Eigen::Index k = whole; k < out.rows * quantized_tiles::group; ++k) {
+        quantized_value c;
+        if (k < dim) {
+          if (x[k] < 0.0F) {
+            report.negative = true;
+            return report;
+          }
+          c = quantize(x[k], 0);
+        }
+        report.clamped += c.clamped ? 1U : 0U;
+        rest_norm += c.value * c.value;
+        lane[(k / quantized_tiles::group) * quantized_tiles::row_bytes +
+             k % quantized_tiles::group] = static_cast<std::uint8_t>(c.value);
+      }
+      report.clamped += static_cast<std::uint64_t>(xsimd::hadd(clamped));
+      out.norms[q] = static_cast<std::int32_t>(xsimd::hadd(norm)) + rest_norm;
+    }
+    return report;
+  }
+}
+
+inline quantize_report quantize_columns(const float* src, Eigen::Index stride, Eigen::Index n,
+                                        Eigen::Index dim, quantized_store out, Eigen::Index q0) {
+#if defined(TACMAP_PRECOMPILED) && TACMAP_PRECOMPILED
+  return active_kernels().quantize_columns(src, stride, n, dim, out, q0);
+#else
+  return quantize_columns_simd<kernel_arch<float>>(src, stride, n, dim, out, q0);
+#endif
+}
 
 /// With `sum`: out[0][q] (+)= sum_j || F(q) - g_j || over g's descriptors; otherwise
 /// out[j][q] (+)= || F(q) - g_j ||; added when `add`, else stored. Only the positions of the
