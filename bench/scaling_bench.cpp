@@ -4,7 +4,8 @@
 //  * planar: the default model (classic_sift, per window, aligned, exponential) with the
 //    Gaussian odometry model — what `bayes_filter` gives by default. One touch: the first touch
 //    (the whole grid, from a uniform belief), the same on 2 threads (thread_pool_executor), and
-//    a touch once localized with tracking mode on (issue 14, item 3).
+//    a touch once localized with tracking mode on (issue 14, item 3). Beside them, the floor:
+//    reading the model's bytes once and doing nothing else, on 1 and 2 threads.
 //  * 36 headings: rotated_descriptor_likelihood<classic_sift> over a pose grid, the model the
 //    localizer runs for unknown headings: the map's dense field is shared by every heading and
 //    window (per-window descriptors for every heading would need 36 x 3 x 128 floats per
@@ -23,6 +24,7 @@
 #include <tuple>
 #include <utility>
 #include <vector>
+#include <xsimd/xsimd.hpp>
 
 #include "bench_maps.hpp"
 #include "tacmap/descriptor/dense_sift.hpp"
@@ -31,6 +33,7 @@
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/grid/pose_grid.hpp"
 #include "tacmap/measurement/descriptor_likelihood.hpp"
+#include "tacmap/measurement/detail/quantized_kernel.hpp"
 #include "tacmap/measurement/rotated_descriptor_likelihood.hpp"
 #include "tacmap/motion/odometry_gaussian.hpp"
 #include "tacmap/motion/pose_odometry_gaussian.hpp"
@@ -94,6 +97,12 @@ tacmap::image<float> cut(const tacmap::image<float>& map, Eigen::Index dc = 0) {
                    window.width);
 }
 
+// Bytes of the default model's per-window descriptors on a map of that size (int8 storage).
+std::size_t model_bytes(Eigen::Index cols, Eigen::Index rows) {
+  return static_cast<std::size_t>(planar_grid_of(map_of(cols, rows)).size()) * 3 *
+         static_cast<std::size_t>(tacmap::detail::quantized_tiles::bytes_per_position(128));
+}
+
 void planar_prepare(benchmark::State& state, Eigen::Index cols, Eigen::Index rows) {
   const auto& map = map_of(cols, rows);
   for (auto _ : state) {
@@ -153,6 +162,47 @@ void planar_tracked_touch(benchmark::State& state, Eigen::Index cols, Eigen::Ind
   f.set_tracking({});
 }
 
+// The floor under the first touch: reading as many bytes as the default model streams per
+// touch (its int8 per-window descriptors: 3 patches x (128 + 4) bytes per window), with one
+// 32-byte load per row and nothing else, on one thread and on the same 2-thread pool. A first
+// touch cannot beat this, so the 2-thread figure's ceiling on a given machine is the ratio of
+// these two rows (issue 14, item 5), not the core count.
+void read_floor(benchmark::State& state, std::size_t bytes, std::size_t threads) {
+  using batch = xsimd::batch<std::int32_t>;
+  constexpr std::size_t lanes = batch::size;
+  std::vector<std::int32_t, xsimd::aligned_allocator<std::int32_t, 64>> data(
+      bytes / sizeof(std::int32_t) / (2 * lanes) * (2 * lanes));
+  for (std::size_t i = 0; i < data.size(); ++i) data[i] = static_cast<std::int32_t>(i);
+  tacmap::thread_pool_executor pool(threads);
+  std::vector<std::int32_t> sums(threads * 16);  // 64 bytes apart: no false sharing
+  for (auto _ : state) {
+    pool.parallel_for(threads, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t c = begin; c < end; ++c) {
+        const std::size_t pairs = data.size() / (2 * lanes);
+        const std::size_t from = pairs * c / threads * 2 * lanes;
+        const std::size_t to = pairs * (c + 1) / threads * 2 * lanes;
+        batch a(0), b(0);
+        for (std::size_t i = from; i < to; i += 2 * lanes) {
+          a += batch::load_aligned(data.data() + i);
+          b += batch::load_aligned(data.data() + i + lanes);
+        }
+        sums[c * 16] = xsimd::hadd(a + b);
+      }
+    });
+    benchmark::DoNotOptimize(sums.data());
+  }
+  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations()) *
+                          static_cast<std::int64_t>(data.size() * sizeof(std::int32_t)));
+}
+
+void read_floor_1_thread(benchmark::State& state, Eigen::Index cols, Eigen::Index rows) {
+  read_floor(state, model_bytes(cols, rows), 1);
+}
+
+void read_floor_2_threads(benchmark::State& state, Eigen::Index cols, Eigen::Index rows) {
+  read_floor(state, model_bytes(cols, rows), 2);
+}
+
 // Registered at start-up: 120 x 120 always, the larger maps with TACMAP_BENCH_SCALING set.
 [[maybe_unused]] const int registered = [] {
   std::vector<std::pair<Eigen::Index, Eigen::Index>> sizes{{120, 120}};
@@ -163,6 +213,8 @@ void planar_tracked_touch(benchmark::State& state, Eigen::Index cols, Eigen::Ind
       {"planar_prepare", planar_prepare, benchmark::kMillisecond},
       {"planar_first_touch", planar_first_touch, benchmark::kMicrosecond},
       {"planar_first_touch_2_threads", planar_first_touch_2_threads, benchmark::kMicrosecond},
+      {"read_floor_1_thread", read_floor_1_thread, benchmark::kMicrosecond},
+      {"read_floor_2_threads", read_floor_2_threads, benchmark::kMicrosecond},
       {"planar_tracked_touch", planar_tracked_touch, benchmark::kMicrosecond},
       {"pose36_prepare", pose_prepare, benchmark::kMillisecond},
       {"pose36_touch", pose_first_touch, benchmark::kMicrosecond},
