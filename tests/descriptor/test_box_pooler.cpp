@@ -60,7 +60,8 @@ double pooled_difference(const std::vector<dsift::pooling_tap<float>>& taps, Eig
                          Eigen::Index w, const std::vector<Eigen::Index>& rows) {
   const Eigen::Index n = w * angles;
   dsift::row_pooler<angles, float> per_tap(taps, channels.data(), w, margin, 0, w);
-  dsift::box_pooler<angles> boxes(taps, channels.data(), h, w, margin, bin, w);
+  dsift::box_pooler<angles> boxes(taps, channels.data(), h, w, margin, bin, w,
+                                  *std::max_element(channels.begin(), channels.end()));
   std::vector<float> expected(static_cast<std::size_t>(n));
   std::vector<float> got(static_cast<std::size_t>(n));
   double worst = 0.0;

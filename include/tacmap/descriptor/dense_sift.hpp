@@ -290,7 +290,7 @@ class dense_sift {
     const Eigen::Index s = params_.grid_spacing;
     const pixel_size grid = sample_grid_size({w, h});
     Eigen::Array<T, Eigen::Dynamic, 1> channels;
-    orientation_channels(img, channels);
+    const T top = orientation_channels(img, channels);
 
     // The pooled rows the grid's bins read, and where each lands in `pooled` (-1: unused).
     std::vector<bool> needed(static_cast<std::size_t>(h), false);
@@ -318,7 +318,7 @@ class dense_sift {
     if constexpr (std::is_same_v<T, float>) {
       if (detail::dsift::box_pooler<NumAngles>::applies(pooling_, bin_, margin())) {
         detail::dsift::box_pooler<NumAngles> pool(pooling_, channels.data(), h, w, margin(), bin_,
-                                                  nx);
+                                                  nx, top);
         pool_rows(pool);
         pooled_exactly = true;
       }
@@ -384,10 +384,18 @@ class dense_sift {
     check_image(img, "compute");
     const Eigen::Index h = img.rows();
     const Eigen::Index w = img.cols();
-    // (The span path's zero-margin bookkeeping does not hold for a whole-image pass.)
-    scratch.zeroed_rows = scratch.zeroed_cols = scratch.zeroed_margin = -1;
+    // The channels' margins are cleared only when the workspace has not seen this size (the
+    // whole-image pass writes every pixel inside them, never the margins; 2 % of a 120 px
+    // field). Unknown until done, in case of an exception.
     Eigen::Array<T, Eigen::Dynamic, 1>& channels = scratch.channels;
-    orientation_channels(img, channels, scratch.gx, scratch.gy);
+    const bool zeroed = scratch.zeroed_rows == h && scratch.zeroed_cols == w &&
+                        scratch.zeroed_margin == margin() &&
+                        channels.size() == (h + 2 * margin()) * (w + 2 * margin()) * NumAngles;
+    scratch.zeroed_rows = scratch.zeroed_cols = scratch.zeroed_margin = -1;
+    const T top = orientation_channels(img, channels, scratch.gx, scratch.gy, zeroed);
+    scratch.zeroed_rows = h;
+    scratch.zeroed_cols = w;
+    scratch.zeroed_margin = margin();
 
     // Bin b of the patch at top-left t samples the pooled channels at t + b * bin, for every
     // row and column in [0, size - bin]. A patch row needs pooled rows r .. r + (NumBins-1)*bin:
@@ -398,7 +406,7 @@ class dense_sift {
     if constexpr (std::is_same_v<T, float>) {
       if (detail::dsift::box_pooler<NumAngles>::applies(pooling_, bin_, margin())) {
         detail::dsift::box_pooler<NumAngles> pool(pooling_, channels.data(), h, w, margin(), bin_,
-                                                  nx);
+                                                  nx, top);
         compute_rows(pool, h, w, nx, field);
         return;
       }
@@ -636,19 +644,21 @@ class dense_sift {
     return scale > T(0) ? scale : T(1);
   }
 
-  /// The orientation channels of `img` (layout of detail::dsift::orientation_channels).
-  void orientation_channels(const image_view<T>& img,
-                            Eigen::Array<T, Eigen::Dynamic, 1>& channels) const {
+  /// The orientation channels of `img` (layout of detail::dsift::orientation_channels); returns
+  /// their largest value.
+  T orientation_channels(const image_view<T>& img,
+                         Eigen::Array<T, Eigen::Dynamic, 1>& channels) const {
     Eigen::Array<T, Eigen::Dynamic, 1> gx;
     Eigen::Array<T, Eigen::Dynamic, 1> gy;
-    orientation_channels(img, channels, gx, gy);
+    return orientation_channels(img, channels, gx, gy);
   }
-  void orientation_channels(const image_view<T>& img, Eigen::Array<T, Eigen::Dynamic, 1>& channels,
-                            Eigen::Array<T, Eigen::Dynamic, 1>& gx,
-                            Eigen::Array<T, Eigen::Dynamic, 1>& gy) const {
+  T orientation_channels(const image_view<T>& img, Eigen::Array<T, Eigen::Dynamic, 1>& channels,
+                         Eigen::Array<T, Eigen::Dynamic, 1>& gx,
+                         Eigen::Array<T, Eigen::Dynamic, 1>& gy, bool margins_zero = false) const {
     const Eigen::Index stride = detail::dsift::gradients(img, peak(img), gradient_, gx, gy);
-    detail::dsift::orientation_channels<NumAngles>(gx, gy, img.rows(), img.cols(), stride, margin(),
-                                                   cos_a_, sin_a_, params_.alpha, channels);
+    return detail::dsift::orientation_channels<NumAngles>(gx, gy, img.rows(), img.cols(), stride,
+                                                          margin(), cos_a_, sin_a_, params_.alpha,
+                                                          channels, nullptr, margins_zero);
   }
 
   /// `orientation_channels` at the columns spans[y] of each row y, into scratch.channels, all
