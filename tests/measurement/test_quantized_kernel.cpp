@@ -193,6 +193,25 @@ TEST_CASE("quantize: clamps are counted, never NaN or an out-of-range byte") {
   for (Eigen::Index p = 0; p < 3; ++p) CHECK(std::isfinite(d(p)));
 }
 
+TEST_CASE("quantize rounds as std::lround inside the range, ties and their neighbours too") {
+  // quantize rounds without the library call; std::lround (halves away from zero) is the
+  // definition. Both signs (the touch side is signed), every tie k + 0.5 and one ulp either side.
+  using tacmap::detail::quantization_scale;
+  using tacmap::detail::quantize;
+  for (int k = -128; k <= 127; ++k) {
+    const float tie = static_cast<float>(k) + 0.5F;
+    for (const float x : {tie, std::nextafter(tie, -1e3F), std::nextafter(tie, 1e3F),
+                          static_cast<float>(k), std::nextafter(static_cast<float>(k), 1e3F)}) {
+      if (!(x >= -127.0F && x <= 127.0F)) continue;
+      const float v = x / quantization_scale;
+      const float scaled = v * quantization_scale;  // what quantize rounds
+      CAPTURE(x);
+      CHECK(quantize(v, -127).value == static_cast<std::int32_t>(std::lround(scaled)));
+      CHECK_FALSE(quantize(v, -127).clamped);
+    }
+  }
+}
+
 TEST_CASE("quantized_tiles::set_columns stores what quantize gives, element for element") {
   // set_columns quantises whole batches in registers (quantize_columns_simd); quantize is the
   // scalar definition. Every rounding tie k + 0.5, its neighbours one ulp away, the clamp's

@@ -62,7 +62,12 @@ struct quantized_value {
   const float x = v * quantization_scale;
   if (!(x >= static_cast<float>(lowest))) return {lowest == 0 || std::isnan(x) ? 0 : lowest, true};
   if (x > 127.0F) return {127, x >= 127.5F};  // rounds to 127 unless it exceeds it
-  return {static_cast<std::int32_t>(std::lround(x)), false};
+  // std::lround (halves away from zero) without the library call: |x| <= 127, so the
+  // remainder |x| - trunc|x| is exact.
+  const float a = std::fabs(x);
+  const auto t = static_cast<std::int32_t>(a);
+  const std::int32_t r = t + (a - static_cast<float>(t) >= 0.5F ? 1 : 0);
+  return {x < 0.0F ? -r : r, false};
 }
 
 /// Where `quantize_columns` writes: `quantized_tiles`' layout (tiles of 8 positions, `rows`
