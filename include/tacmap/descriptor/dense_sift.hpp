@@ -386,16 +386,11 @@ class dense_sift {
     const Eigen::Index w = img.cols();
     // The channels' margins are cleared only when the workspace has not seen this size (the
     // whole-image pass writes every pixel inside them, never the margins; 2 % of a 120 px
-    // field). Unknown until done, in case of an exception.
+    // field).
     Eigen::Array<T, Eigen::Dynamic, 1>& channels = scratch.channels;
-    const bool zeroed = scratch.zeroed_rows == h && scratch.zeroed_cols == w &&
-                        scratch.zeroed_margin == margin() &&
-                        channels.size() == (h + 2 * margin()) * (w + 2 * margin()) * NumAngles;
-    scratch.zeroed_rows = scratch.zeroed_cols = scratch.zeroed_margin = -1;
-    const T top = orientation_channels(img, channels, scratch.gx, scratch.gy, zeroed);
-    scratch.zeroed_rows = h;
-    scratch.zeroed_cols = w;
-    scratch.zeroed_margin = margin();
+    const T top = with_zero_margins(h, w, scratch, [&](bool zeroed) {
+      return orientation_channels(img, channels, scratch.gx, scratch.gy, zeroed);
+    });
 
     // Bin b of the patch at top-left t samples the pooled channels at t + b * bin, for every
     // row and column in [0, size - bin]. A patch row needs pooled rows r .. r + (NumBins-1)*bin:
@@ -667,18 +662,30 @@ class dense_sift {
                      workspace& scratch) const {
     const Eigen::Index stride = detail::dsift::gradients(img, peak(img), gradient_, spans,
                                                          scratch.gx, scratch.gy, scratch.gradients);
-    // The margins are known zero only for the very buffer that had them cleared: same layout
-    // and still that size (a moved-from workspace has them cleared again).
-    const Eigen::Index size = (img.rows() + 2 * margin()) * (img.cols() + 2 * margin()) * NumAngles;
-    const bool zeroed = scratch.zeroed_rows == img.rows() && scratch.zeroed_cols == img.cols() &&
+    with_zero_margins(img.rows(), img.cols(), scratch, [&](bool zeroed) {
+      return detail::dsift::orientation_channels<NumAngles>(
+          scratch.gx, scratch.gy, img.rows(), img.cols(), stride, margin(), cos_a_, sin_a_,
+          params_.alpha, scratch.channels, spans.data(), zeroed);
+    });
+  }
+
+  /// Returns `fill(zeroed)`, which writes scratch.channels for an h x w image but never its
+  /// margins, told whether they are known zero already, and keeps the workspace's record of
+  /// it. The margins are known zero only for the very buffer that had them cleared: same layout
+  /// and still that size (a moved-from workspace has them cleared again); unknown while `fill`
+  /// runs, so an exception leaves them unknown.
+  template <class Fill>
+  auto with_zero_margins(Eigen::Index h, Eigen::Index w, workspace& scratch,
+                         const Fill& fill) const {
+    const Eigen::Index size = (h + 2 * margin()) * (w + 2 * margin()) * NumAngles;
+    const bool zeroed = scratch.zeroed_rows == h && scratch.zeroed_cols == w &&
                         scratch.zeroed_margin == margin() && scratch.channels.size() == size;
-    scratch.zeroed_rows = scratch.zeroed_cols = scratch.zeroed_margin = -1;  // until done
-    detail::dsift::orientation_channels<NumAngles>(scratch.gx, scratch.gy, img.rows(), img.cols(),
-                                                   stride, margin(), cos_a_, sin_a_, params_.alpha,
-                                                   scratch.channels, spans.data(), zeroed);
-    scratch.zeroed_rows = img.rows();
-    scratch.zeroed_cols = img.cols();
+    scratch.zeroed_rows = scratch.zeroed_cols = scratch.zeroed_margin = -1;
+    const auto result = fill(zeroed);
+    scratch.zeroed_rows = h;
+    scratch.zeroed_cols = w;
     scratch.zeroed_margin = margin();
+    return result;
   }
 
   /// Zero pixels around the channels: the pooling taps reach patch/2 px from a sample point.

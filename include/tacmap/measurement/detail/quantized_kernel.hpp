@@ -29,6 +29,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <optional>
 #include <type_traits>
 #include <vector>
 #include <xsimd/xsimd.hpp>
@@ -76,6 +77,9 @@ struct quantized_store {
   std::uint8_t* data = nullptr;
   std::int32_t* norms = nullptr;
   Eigen::Index rows = 0;
+
+  /// Position q's first group in its tile (its later groups are 32-byte rows further on).
+  [[nodiscard]] std::uint8_t* lane(Eigen::Index q) const;
 };
 
 /// What `quantize_columns` did: the elements clamped at 127 (NaN counted, stored as 0), and
@@ -182,6 +186,11 @@ class quantized_tiles {
   std::vector<std::uint8_t, xsimd::aligned_allocator<std::uint8_t, 64>> data_;
   std::vector<std::int32_t, xsimd::aligned_allocator<std::int32_t, 64>> norms_;
 };
+
+inline std::uint8_t* quantized_store::lane(Eigen::Index q) const {
+  return data + (q / quantized_tiles::width) * rows * quantized_tiles::row_bytes +
+         (q % quantized_tiles::width) * quantized_tiles::group;
+}
 
 /// Tactile descriptors quantised for `quantized_distances`: column j's elements as signed bytes
 /// in [-127, 127] (padded with zeros to whole 4-element groups), and its squared norm.
@@ -446,32 +455,44 @@ void tiles(const quantized_tiles& f, const quantized_query& g, Eigen::Index j0, 
 
 }  // namespace quantized_kernel
 
+namespace quantized_kernel {
+
+// `quantize(v, 0)` of elements [from, dim) of column x into its lane (`quantized_store::lane`),
+// and zeros up to the end of its last group; adds the clamped ones to `report`. Returns their
+// squared norm, or nothing (report.negative set) at a negative element.
+inline std::optional<std::int32_t> quantize_rest(const float* x, Eigen::Index from,
+                                                 Eigen::Index dim, Eigen::Index rows,
+                                                 std::uint8_t* lane, quantize_report& report) {
+  std::int32_t norm = 0;
+  for (Eigen::Index k = from; k < rows * quantized_tiles::group; ++k) {
+    quantized_value c;
+    if (k < dim) {
+      if (x[k] < 0.0F) {
+        report.negative = true;
+        return std::nullopt;
+      }
+      c = quantize(x[k], 0);
+    }
+    report.clamped += c.clamped ? 1U : 0U;
+    norm += c.value * c.value;
+    lane[(k / quantized_tiles::group) * quantized_tiles::row_bytes + k % quantized_tiles::group] =
+        static_cast<std::uint8_t>(c.value);
+  }
+  return norm;
+}
+
+}  // namespace quantized_kernel
+
 /// `quantize_columns`' plain reference: `quantize(v, 0)` element by element.
 inline quantize_report quantize_columns_scalar(const float* src, Eigen::Index stride,
                                                Eigen::Index n, Eigen::Index dim,
                                                quantized_store out, Eigen::Index q0) {
   quantize_report report;
   for (Eigen::Index j = 0; j < n; ++j) {
-    const float* x = src + j * stride;
-    const Eigen::Index q = q0 + j;
-    std::uint8_t* lane = out.data + (q / quantized_tiles::width) * out.rows * 32 +
-                         (q % quantized_tiles::width) * quantized_tiles::group;
-    std::int32_t norm = 0;
-    for (Eigen::Index k = 0; k < out.rows * quantized_tiles::group; ++k) {
-      quantized_value c;
-      if (k < dim) {
-        if (x[k] < 0.0F) {
-          report.negative = true;
-          return report;
-        }
-        c = quantize(x[k], 0);
-      }
-      report.clamped += c.clamped ? 1U : 0U;
-      norm += c.value * c.value;
-      lane[(k / quantized_tiles::group) * quantized_tiles::row_bytes + k % quantized_tiles::group] =
-          static_cast<std::uint8_t>(c.value);
-    }
-    out.norms[q] = norm;
+    const auto norm = quantized_kernel::quantize_rest(src + j * stride, 0, dim, out.rows,
+                                                      out.lane(q0 + j), report);
+    if (!norm) return report;
+    out.norms[q0 + j] = *norm;
   }
   return report;
 }
@@ -530,8 +551,7 @@ quantize_report quantize_columns_simd(const float* src, Eigen::Index stride, Eig
     for (Eigen::Index j = 0; j < n; ++j) {
       const float* x = src + j * stride;
       const Eigen::Index q = q0 + j;
-      std::uint8_t* lane = out.data + (q / quantized_tiles::width) * out.rows * 32 +
-                           (q % quantized_tiles::width) * quantized_tiles::group;
+      std::uint8_t* lane = out.lane(q);
       auto negative = batch(0.0F) != batch(0.0F);
       batch clamped(0.0F), norm(0.0F);
       for (Eigen::Index k = 0; k < whole; k += size) {
@@ -552,23 +572,10 @@ quantize_report quantize_columns_simd(const float* src, Eigen::Index stride, Eig
         return report;
       }
       // The rest of the column and the zero padding of its last group.
-      std::int32_t rest_norm = 0;
-      for (Eigen::Index k = whole; k < out.rows * quantized_tiles::group; ++k) {
-        quantized_value c;
-        if (k < dim) {
-          if (x[k] < 0.0F) {
-            report.negative = true;
-            return report;
-          }
-          c = quantize(x[k], 0);
-        }
-        report.clamped += c.clamped ? 1U : 0U;
-        rest_norm += c.value * c.value;
-        lane[(k / quantized_tiles::group) * quantized_tiles::row_bytes +
-             k % quantized_tiles::group] = static_cast<std::uint8_t>(c.value);
-      }
+      const auto rest = quantized_kernel::quantize_rest(x, whole, dim, out.rows, lane, report);
+      if (!rest) return report;
       report.clamped += static_cast<std::uint64_t>(xsimd::hadd(clamped));
-      out.norms[q] = static_cast<std::int32_t>(xsimd::hadd(norm)) + rest_norm;
+      out.norms[q] = static_cast<std::int32_t>(xsimd::hadd(norm)) + *rest;
     }
     return report;
   }
