@@ -79,37 +79,42 @@ void check_against_reference(const quantized_tiles& f, const quantized_query& g)
 
 TEST_CASE("quantized_distances matches its scalar reference bit for bit") {
   std::mt19937 rng(14);
-  std::uniform_real_distribution<float> value(0.0F, 0.5F);
-  for (const Eigen::Index positions : {1, 7, 8, 9, 31, 1000}) {
-    for (const Eigen::Index dim : {1, 5, 32, 128}) {
-      CAPTURE(positions);
-      CAPTURE(dim);
-      Eigen::ArrayXXf f(dim, positions);
-      for (float& v : f.reshaped()) v = value(rng);
-      quantized_tiles tiles(positions, dim);
-      REQUIRE(tiles.set_columns(0, f));
-      CHECK(tiles.clamped() == 0);
-      for (Eigen::Index q = 0; q < positions; q += 3)
-        for (Eigen::Index k = 0; k < dim; ++k)
-          REQUIRE(tiles.at(q, k) == static_cast<std::int32_t>(std::lround(f(k, q) * 254.0F)));
-      for (const Eigen::Index count : {1, 2, 3, 5}) {
-        CAPTURE(count);
-        Eigen::ArrayXXf g(dim, count);
-        for (float& v : g.reshaped()) v = value(rng);
-        g.col(0) = f.col(positions / 2);  // an exact match
-        quantized_query q;
-        q.assign(g);
-        check_against_reference(tiles, q);
-        // The exact match is exactly 0: integer arithmetic has no cancellation.
-        Eigen::ArrayXf d(positions);
-        float* o = d.data();
-        quantized_query one;
-        one.assign(g.leftCols(1));
-        tacmap::detail::quantized_distances(tiles, one, &o, true, false);
-        CHECK(d(positions / 2) == 0.0F);
+  // Up to 0.5: bytes up to 127, one row per widening; up to 0.25: bytes up to 64, two rows per
+  // widening in the AVX2 kernel (64 x 64 <= paired_rows_bound). Dimensions with an odd number
+  // of rows (5: 2 rows; 12: 3; 20: 5) end with a single row after the pairs.
+  for (const float top : {0.5F, 0.25F})
+    for (const Eigen::Index positions : {1, 7, 8, 9, 31, 1000}) {
+      for (const Eigen::Index dim : {1, 5, 12, 20, 32, 128}) {
+        std::uniform_real_distribution<float> value(0.0F, top);
+        CAPTURE(top);
+        CAPTURE(positions);
+        CAPTURE(dim);
+        Eigen::ArrayXXf f(dim, positions);
+        for (float& v : f.reshaped()) v = value(rng);
+        quantized_tiles tiles(positions, dim);
+        REQUIRE(tiles.set_columns(0, f));
+        CHECK(tiles.clamped() == 0);
+        for (Eigen::Index q = 0; q < positions; q += 3)
+          for (Eigen::Index k = 0; k < dim; ++k)
+            REQUIRE(tiles.at(q, k) == static_cast<std::int32_t>(std::lround(f(k, q) * 254.0F)));
+        for (const Eigen::Index count : {1, 2, 3, 5}) {
+          CAPTURE(count);
+          Eigen::ArrayXXf g(dim, count);
+          for (float& v : g.reshaped()) v = value(rng);
+          g.col(0) = f.col(positions / 2);  // an exact match
+          quantized_query q;
+          q.assign(g);
+          check_against_reference(tiles, q);
+          // The exact match is exactly 0: integer arithmetic has no cancellation.
+          Eigen::ArrayXf d(positions);
+          float* o = d.data();
+          quantized_query one;
+          one.assign(g.leftCols(1));
+          tacmap::detail::quantized_distances(tiles, one, &o, true, false);
+          CHECK(d(positions / 2) == 0.0F);
+        }
       }
     }
-  }
 }
 
 TEST_CASE("quantized_distances: the extremes of the 7-bit range do not saturate") {
@@ -144,6 +149,82 @@ TEST_CASE("quantized_distances: the extremes of the 7-bit range do not saturate"
       CHECK(d(p, 2) == expect(127.0));
     }
   }
+}
+
+TEST_CASE("quantized_distances: two rows per widening only where int16 holds them") {
+  // The AVX2 kernel adds two rows' vpmaddubsw pair sums in int16 (4 products per lane) when
+  // map peak x touch peak <= 8,191. At 127 x 64 = 8,128 a lane reaches +-32,512: exact. At
+  // 127 x 65 = 8,255 it would reach +-33,020 and wrap, so those tiles must widen one row at a
+  // time: the reference (int32 throughout) would tell. Every map byte 127.
+  using tacmap::detail::paired_rows_bound;
+  CHECK(4 * paired_rows_bound <= 32767);
+  CHECK(4 * (paired_rows_bound + 1) > 32767);
+  const Eigen::Index positions = 40;  // one block of 4 tiles, then a single tile
+  for (const Eigen::Index dim : {8, 12, 128}) {
+    CAPTURE(dim);
+    quantized_tiles tiles(positions, dim);
+    REQUIRE(tiles.set_columns(0, Eigen::ArrayXXf::Constant(dim, positions, 0.5F)));
+    for (Eigen::Index t = 0; t < tiles.tiles(); ++t) CHECK(tiles.peak(t) == 127);
+    for (const std::int32_t b : {64, 65, 127}) {
+      CAPTURE(b);
+      Eigen::ArrayXXf g(dim, 2);
+      g.col(0).setConstant(static_cast<float>(b) / 254.0F);
+      g.col(1).setConstant(-static_cast<float>(b) / 254.0F);
+      quantized_query q;
+      q.assign(g);
+      CHECK(q.peak(0) == b);
+      CHECK(q.peak(1) == b);
+      check_against_reference(tiles, q);
+      Eigen::ArrayXXf d(positions, 2);
+      float* o[2] = {&d(0, 0), &d(0, 1)};
+      tacmap::detail::quantized_distances(tiles, q, o, false, false);
+      const auto expect = [&](std::int32_t per_element) {
+        return doctest::Approx(std::sqrt(static_cast<double>(dim)) * per_element / 254.0)
+            .epsilon(1e-6);
+      };
+      for (Eigen::Index p = 0; p < positions; ++p) {
+        REQUIRE(d(p, 0) == expect(127 - b));
+        REQUIRE(d(p, 1) == expect(127 + b));
+      }
+    }
+  }
+  // Peaks differ inside a block: one tile of 127s among tiles of small bytes decides the whole
+  // block (one row per widening against a touch of 100), the blocks without it pair.
+  std::mt19937 rng(141);
+  std::uniform_real_distribution<float> small(0.0F, 0.3F);
+  Eigen::ArrayXXf f(128, 80);
+  for (float& v : f.reshaped()) v = small(rng);
+  f.middleCols(16, 8).setConstant(0.5F);  // tile 2
+  quantized_tiles mixed(80, 128);
+  REQUIRE(mixed.set_columns(0, f.leftCols(37)));  // tiles written in two parts
+  REQUIRE(mixed.set_columns(37, f.rightCols(43)));
+  for (Eigen::Index t = 0; t < mixed.tiles(); ++t) {
+    std::int32_t top = 0;
+    for (Eigen::Index q = t * 8; q < t * 8 + 8; ++q)
+      for (Eigen::Index k = 0; k < 128; ++k) top = std::max(top, mixed.at(q, k));
+    CAPTURE(t);
+    CHECK(mixed.peak(t) == top);
+  }
+  CHECK(mixed.peak(2) == 127);
+  CHECK(mixed.peak(0) <= 77);
+  Eigen::ArrayXXf g(128, 3);
+  for (float& v : g.reshaped()) v = small(rng) - 0.15F;
+  g(5, 1) = 100.0F / 254.0F;
+  g(9, 2) = -100.0F / 254.0F;
+  quantized_query q;
+  q.assign(g);
+  CHECK(q.peak(1) == 100);
+  CHECK(q.peak(2) == 100);
+  check_against_reference(mixed, q);
+  // Bytes written through store() may be anything: the peaks become 127 (one row per widening).
+  (void)mixed.store();
+  for (Eigen::Index t = 0; t < mixed.tiles(); ++t) CHECK(mixed.peak(t) == 127);
+  check_against_reference(mixed, q);
+  // A query whose peaks were not filled is taken as 127.
+  quantized_query bare = q;
+  bare.peaks.clear();
+  CHECK(bare.peak(0) == 127);
+  check_against_reference(mixed, bare);
 }
 
 TEST_CASE("quantize: clamps are counted, never NaN or an out-of-range byte") {

@@ -22,6 +22,16 @@
 // the 8 positions (position p at bytes 4p .. 4p + 3), so one `vpmaddubsw` + `vpmaddwd` gives 8
 // partial dot products of 4 elements, one per position, with no horizontal sums. The dimension
 // is padded with zeros to a multiple of 4 (zeros change no dot product or norm).
+//
+// Two rows per widening, where it is exact: `vpmaddwd` (the widening to int32) takes as many
+// multiplier cycles as `vpmaddubsw`, so the AVX2 kernel adds two rows' int16 pair sums first
+// and widens once (3 multiplies per 2 rows instead of 4). A lane then holds 4 products, exact
+// in int16 when 4 x A x B <= 32,767, A being the largest map byte of the tiles and B the
+// largest |touch byte| (`paired_rows_bound`). Each tile keeps its A (`quantized_tiles::peak`,
+// set when it is written) and each query column its B, so the kernel decides per block of
+// tiles; SIFT's 0.2 clamp keeps A and B near 64-95 for almost every tile (the default 120 px
+// map: 98 % of the blocks). Others take one row per widening: every path gives the same
+// integers, hence the same bits.
 #pragma once
 
 #include <Eigen/Core>
@@ -97,6 +107,10 @@ struct quantize_report {
 inline quantize_report quantize_columns(const float* src, Eigen::Index stride, Eigen::Index n,
                                         Eigen::Index dim, quantized_store out, Eigen::Index q0);
 
+/// The largest A x B (map byte x |touch byte|) for which the int16 sum of two rows' pair sums
+/// (4 products) cannot leave [-32,768, 32,767]: 4 x 8,191 = 32,764.
+inline constexpr std::int32_t paired_rows_bound = 8191;
+
 /// Descriptors of `positions` positions as 7-bit integers, tiled for `quantized_distances`.
 class quantized_tiles {
  public:
@@ -111,6 +125,7 @@ class quantized_tiles {
     const Eigen::Index tiles = (positions + width - 1) / width;
     data_.assign(static_cast<std::size_t>(tiles * rows_ * row_bytes), 0);
     norms_.assign(static_cast<std::size_t>(tiles * width), 0);
+    peaks_.assign(static_cast<std::size_t>(tiles), 0);
   }
   /// Quantises and stores descriptors `columns` (dimension x n) at positions q0 .. q0 + n - 1.
   /// Elements above the range are clamped at 127 and counted (`clamped`); a negative element
@@ -120,7 +135,7 @@ class quantized_tiles {
   [[nodiscard]] bool set_columns(Eigen::Index q0, const Eigen::DenseBase<Derived>& columns) {
     TACMAP_ASSERT(columns.rows() == dim_ && q0 >= 0 && q0 + columns.cols() <= positions_,
                   "quantized_tiles::set_columns: columns outside the tiles");
-    const quantized_store out = store();
+    const quantized_store out = raw_store();
     quantize_report report;
     using plain = std::decay_t<decltype(columns.derived())>;
     if constexpr (std::is_same_v<typename Derived::Scalar, float> &&
@@ -134,11 +149,20 @@ class quantized_tiles {
     } else {
       return copy_and_set(q0, columns);
     }
-    clamped_ += report.clamped;
-    return !report.negative;
+    return finish_set(q0, columns.cols(), report);
   }
-  /// Where `quantize_columns` writes into these tiles (for the kernels and their tests).
-  [[nodiscard]] quantized_store store() { return {data_.data(), norms_.data(), rows_}; }
+  /// Where `quantize_columns` writes into these tiles (for the kernels and their tests). The
+  /// tiles' peaks become 127 (unknown): the kernel then widens one row at a time, exact for any
+  /// byte written there.
+  [[nodiscard]] quantized_store store() {
+    std::fill(peaks_.begin(), peaks_.end(), std::uint8_t{127});
+    return raw_store();
+  }
+  /// The largest byte of tile t (an upper bound: 127 after `store()`), for the kernel's choice
+  /// of two rows per widening (`paired_rows_bound`).
+  [[nodiscard]] std::int32_t peak(Eigen::Index t) const {
+    return peaks_[static_cast<std::size_t>(t)];
+  }
   /// Element k of position q (an integer in [0, 127]).
   [[nodiscard]] std::int32_t at(Eigen::Index q, Eigen::Index k) const {
     return data_[static_cast<std::size_t>((q / width) * rows_ * row_bytes +
@@ -176,8 +200,24 @@ class quantized_tiles {
   [[nodiscard]] bool copy_and_set(Eigen::Index q0, const Eigen::DenseBase<Derived>& columns) {
     values_ = columns.template cast<float>();
     const quantize_report report =
-        quantize_columns(values_.data(), values_.rows(), values_.cols(), dim_, store(), q0);
+        quantize_columns(values_.data(), values_.rows(), values_.cols(), dim_, raw_store(), q0);
+    return finish_set(q0, values_.cols(), report);
+  }
+  [[nodiscard]] quantized_store raw_store() { return {data_.data(), norms_.data(), rows_}; }
+  // The peaks of the tiles positions q0 .. q0 + n - 1 lie in, from their bytes (the whole
+  // tiles: a tile may be written in parts). A plain loop the compiler vectorises: 0.1 ms of
+  // the 120 px map's 3.2 MB.
+  [[nodiscard]] bool finish_set(Eigen::Index q0, Eigen::Index n, const quantize_report& report) {
     clamped_ += report.clamped;
+    if (n > 0) {
+      const Eigen::Index tile_bytes = rows_ * row_bytes;
+      for (Eigen::Index t = q0 / width; t <= (q0 + n - 1) / width; ++t) {
+        const std::uint8_t* b = data_.data() + t * tile_bytes;
+        std::uint8_t top = 0;
+        for (Eigen::Index k = 0; k < tile_bytes; ++k) top = std::max(top, b[k]);
+        peaks_[static_cast<std::size_t>(t)] = top;
+      }
+    }
     return !report.negative;
   }
 
@@ -185,6 +225,7 @@ class quantized_tiles {
   // 64-byte aligned: the AVX2 kernel loads whole rows aligned.
   std::vector<std::uint8_t, xsimd::aligned_allocator<std::uint8_t, 64>> data_;
   std::vector<std::int32_t, xsimd::aligned_allocator<std::int32_t, 64>> norms_;
+  std::vector<std::uint8_t> peaks_;  // one per tile: its largest byte (see `peak`)
 };
 
 inline std::uint8_t* quantized_store::lane(Eigen::Index q) const {
@@ -199,9 +240,14 @@ struct quantized_query {
   Eigen::Index rows = 0;            // 4-element groups
   std::vector<std::int8_t> values;  // column j at j * rows * 4
   std::vector<std::int32_t> norms;  // one per column
+  std::vector<std::int32_t> peaks;  // one per column: its largest |element|
   std::uint64_t clamped = 0;        // elements clamped into [-127, 127]
 
   [[nodiscard]] Eigen::Index count() const { return static_cast<Eigen::Index>(norms.size()); }
+  /// Column j's largest |element| (127 where `peaks` was not filled: the exact bound for any).
+  [[nodiscard]] std::int32_t peak(Eigen::Index j) const {
+    return j < static_cast<Eigen::Index>(peaks.size()) ? peaks[static_cast<std::size_t>(j)] : 127;
+  }
   [[nodiscard]] const std::int8_t* column(Eigen::Index j) const {
     return values.data() + j * rows * quantized_tiles::group;
   }
@@ -212,6 +258,7 @@ struct quantized_query {
     rows = (dimension + quantized_tiles::group - 1) / quantized_tiles::group;
     values.assign(static_cast<std::size_t>(g.cols() * rows * quantized_tiles::group), 0);
     norms.assign(static_cast<std::size_t>(g.cols()), 0);
+    peaks.assign(static_cast<std::size_t>(g.cols()), 0);
     clamped = 0;
     for (Eigen::Index j = 0; j < g.cols(); ++j)
       for (Eigen::Index k = 0; k < dimension; ++k) {
@@ -220,6 +267,8 @@ struct quantized_query {
         values[static_cast<std::size_t>(j * rows * quantized_tiles::group + k)] =
             static_cast<std::int8_t>(c.value);
         norms[static_cast<std::size_t>(j)] += c.value * c.value;
+        auto& top = peaks[static_cast<std::size_t>(j)];
+        top = std::max(top, c.value < 0 ? -c.value : c.value);
       }
   }
 };
@@ -325,8 +374,10 @@ void tile_dots_portable(const quantized_tiles& f, Eigen::Index t, const quantize
 // partial tile goes the portable way.
 // Tiles whole tiles from t0 on against descriptors [j0, j0 + Count): several tiles at once, so
 // that each broadcast row of the touch is loaded once for all of them and more loads of the
-// map are in flight (measured: one tile at a time was bound by its loads' latency).
-template <std::size_t Tiles, std::size_t Count, class A>
+// map are in flight (measured: one tile at a time was bound by its loads' latency). Paired:
+// two rows' int16 pair sums added before one widening (the caller checked
+// `paired_rows_bound`; see the top of this file).
+template <std::size_t Tiles, std::size_t Count, bool Paired, class A>
 void block_avx2(const quantized_tiles& f, const quantized_query& g, Eigen::Index j0,
                 Eigen::Index t0, const std::int8_t* const* gb, float* const* out, bool sum,
                 bool add, Eigen::Index origin) {
@@ -339,28 +390,45 @@ void block_avx2(const quantized_tiles& f, const quantized_query& g, Eigen::Index
   const char* ahead = reinterpret_cast<const char*>(tile[0]) +
                       2 * static_cast<Eigen::Index>(Tiles) * rows * quantized_tiles::row_bytes;
   constexpr auto row_share = static_cast<Eigen::Index>(Tiles) * quantized_tiles::row_bytes;
-  // Row 0 sets the sums, later rows add to them: zeroing the array first made GCC 12 clear a
-  // stack copy with `rep stos` at every block (7 % of the kernel's time in the profile).
-  const auto row = [&]<bool First>(Eigen::Index r) {
-    for (Eigen::Index b = 0; b < row_share; b += 64)
+  // Rows r .. r + Rows - 1 (1 or 2). The first call sets the sums, later ones add to them:
+  // zeroing the array first made GCC 12 clear a stack copy with `rep stos` at every block (7 %
+  // of the kernel's time in the profile).
+  const auto rows_at = [&]<bool First, std::size_t Rows>(Eigen::Index r) {
+    constexpr auto row_count = static_cast<Eigen::Index>(Rows);
+    for (Eigen::Index b = 0; b < row_count * row_share; b += 64)
       _mm_prefetch(ahead + r * row_share + b, _MM_HINT_T0);
-    __m256i gr[Count];
-    for (std::size_t j = 0; j < Count; ++j) {
-      std::int32_t four = 0;  // one vpbroadcastd from memory (a load, no shuffle)
-      std::memcpy(&four, gb[j] + r * quantized_tiles::group, sizeof four);
-      gr[j] = _mm256_set1_epi32(four);
-    }
-    for (std::size_t i = 0; i < Tiles; ++i) {
-      const __m256i v = _mm256_load_si256(
-          reinterpret_cast<const __m256i*>(tile[i] + r * quantized_tiles::row_bytes));
+    __m256i gr[Rows][Count];
+    for (std::size_t k = 0; k < Rows; ++k)
       for (std::size_t j = 0; j < Count; ++j) {
-        const __m256i p = _mm256_madd_epi16(_mm256_maddubs_epi16(v, gr[j]), ones);
+        std::int32_t four = 0;  // one vpbroadcastd from memory (a load, no shuffle)
+        std::memcpy(&four, gb[j] + (r + static_cast<Eigen::Index>(k)) * quantized_tiles::group,
+                    sizeof four);
+        gr[k][j] = _mm256_set1_epi32(four);
+      }
+    for (std::size_t i = 0; i < Tiles; ++i) {
+      __m256i v[Rows];
+      for (std::size_t k = 0; k < Rows; ++k)
+        v[k] = _mm256_load_si256(reinterpret_cast<const __m256i*>(
+            tile[i] + (r + static_cast<Eigen::Index>(k)) * quantized_tiles::row_bytes));
+      for (std::size_t j = 0; j < Count; ++j) {
+        __m256i pairs = _mm256_maddubs_epi16(v[0], gr[0][j]);
+        if constexpr (Rows == 2)
+          pairs = _mm256_add_epi16(pairs, _mm256_maddubs_epi16(v[1], gr[1][j]));
+        const __m256i p = _mm256_madd_epi16(pairs, ones);
         acc[i][j] = First ? p : _mm256_add_epi32(acc[i][j], p);
       }
     }
   };
-  row.template operator()<true>(0);  // rows >= 1: a descriptor has at least one element
-  for (Eigen::Index r = 1; r < rows; ++r) row.template operator()<false>(r);
+  // rows >= 1: a descriptor has at least one element.
+  if (Paired && rows >= 2) {
+    rows_at.template operator()<true, 2>(0);
+    Eigen::Index r = 2;
+    for (; r + 1 < rows; r += 2) rows_at.template operator()<false, 2>(r);
+    if (r < rows) rows_at.template operator()<false, 1>(r);
+  } else {
+    rows_at.template operator()<true, 1>(0);
+    for (Eigen::Index r = 1; r < rows; ++r) rows_at.template operator()<false, 1>(r);
+  }
   const __m256 inverse_square = _mm256_set1_ps(1.0F / (quantization_scale * quantization_scale));
   for (std::size_t i = 0; i < Tiles; ++i) {
     const Eigen::Index first = (t0 + static_cast<Eigen::Index>(i)) * quantized_tiles::width;
@@ -436,10 +504,28 @@ void tiles(const quantized_tiles& f, const quantized_query& g, Eigen::Index j0, 
     constexpr std::size_t per_block = Count == 1 ? 4 : 2;
     constexpr auto step = static_cast<Eigen::Index>(per_block);
     const Eigen::Index whole = std::min(end, f.positions() / quantized_tiles::width);
+    // Two rows per widening where the bytes allow it (see the top of this file).
+    std::int32_t touch_peak = 0;
+    for (std::size_t j = 0; j < Count; ++j)
+      touch_peak = std::max(touch_peak, g.peak(j0 + static_cast<Eigen::Index>(j)));
+    const auto paired = [&](Eigen::Index first, Eigen::Index n) {
+      std::int32_t map_peak = 0;
+      for (Eigen::Index i = first; i < first + n; ++i) map_peak = std::max(map_peak, f.peak(i));
+      return map_peak * touch_peak <= paired_rows_bound;
+    };
     Eigen::Index t = range.begin;
-    for (; t + step <= whole; t += step)
-      block_avx2<per_block, Count, A>(f, g, j0, t, gb, out, sum, add, origin);
-    for (; t < whole; ++t) block_avx2<1, Count, A>(f, g, j0, t, gb, out, sum, add, origin);
+    for (; t + step <= whole; t += step) {
+      if (paired(t, step))
+        block_avx2<per_block, Count, true, A>(f, g, j0, t, gb, out, sum, add, origin);
+      else
+        block_avx2<per_block, Count, false, A>(f, g, j0, t, gb, out, sum, add, origin);
+    }
+    for (; t < whole; ++t) {
+      if (paired(t, 1))
+        block_avx2<1, Count, true, A>(f, g, j0, t, gb, out, sum, add, origin);
+      else
+        block_avx2<1, Count, false, A>(f, g, j0, t, gb, out, sum, add, origin);
+    }
     for (; t < end; ++t) {  // the partial last tile: its padding is zeros, finished in scalar
       tile_dots_avx2<Count, A>(f, t, gb, dot);
       finish_tile<Count, A>(f, g, j0, dot, t * quantized_tiles::width, out, sum, add, origin);
