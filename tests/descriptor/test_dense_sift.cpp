@@ -800,4 +800,49 @@ TEST_CASE(
   check(dense_sift<2, 8, double>{}, double{});
 }
 
+TEST_CASE("sample into a reused workspace and output gives sample(img)'s descriptors bit for bit") {
+  // What the descriptor models do per touch: one workspace and one output through touches of
+  // one size, then other sizes and back (the buffers shrink, grow and are reused, the grid and
+  // its pooled rows change), with compute and describe_at sharing the workspace in between
+  // (their channels and zero-margin bookkeeping must not leak into sample's).
+  const auto check = [](auto d, auto tag) {
+    using T = decltype(tag);
+    typename decltype(d)::workspace scratch;
+    tacmap::descriptor_samples<T> out;
+    tacmap::descriptor_field<T> field;
+    const std::array<std::pair<Eigen::Index, Eigen::Index>, 6> sizes{
+        {{42, 18}, {42, 18}, {30, 41}, {42, 18}, {60, 25}, {42, 18}}};
+    unsigned seed = 40;
+    for (const auto& [rows, cols] : sizes) {
+      CAPTURE(rows);
+      CAPTURE(cols);
+      const image<T> img = random_image<T>(rows, cols, ++seed);
+      if (seed % 2 == 0) {
+        const tacmap::grid_cell corner{0, 0};
+        (void)d.describe_at(img, std::span<const tacmap::grid_cell>(&corner, 1), scratch);
+      } else if (seed % 3 == 0) {
+        d.compute(img, field, scratch);
+      }
+      d.sample(img, scratch, out);
+      const auto fresh = d.sample(img);
+      REQUIRE(out.rows == fresh.rows);
+      REQUIRE(out.cols == fresh.cols);
+      REQUIRE(out.spacing == fresh.spacing);
+      REQUIRE(out.values.rows() == fresh.values.rows());
+      REQUIRE(out.values.cols() == fresh.values.cols());
+      CHECK((out.values == fresh.values).all());
+    }
+    // A bad image is refused as by sample(img), and the workspace still serves afterwards.
+    image<T> bad = random_image<T>(42, 18, 7U);
+    bad(3, 4) = std::numeric_limits<T>::quiet_NaN();
+    CHECK_THROWS_AS(d.sample(bad, scratch, out), std::invalid_argument);
+    const image<T> good = random_image<T>(42, 18, 8U);
+    d.sample(good, scratch, out);
+    CHECK((out.values == d.sample(good).values).all());
+  };
+  check(sift_lite{}, float{});
+  check(classic_sift{}, float{});
+  check(dense_sift<2, 8, double>{}, double{});
+}
+
 }  // namespace test_dense_sift

@@ -268,6 +268,25 @@ class dense_sift {
   }
 
  public:
+  /// Scratch memory `describe_at`, `compute` and `sample` can reuse between calls (one per
+  /// thread). Why: the orientation channels of a 46 x 46 canvas take 128 KB, glibc serves
+  /// blocks that large straight from the OS, and the fresh pages' faults cost more than
+  /// computing the channels (measured: 50 us per call allocating, 13 us reusing). It also keeps
+  /// the gradient buffers (no allocation per call) and, for images of the size it last saw, the
+  /// channels' zero margins (not cleared again: 62 KB per 46 x 46 canvas). Together 9 % of the
+  /// pose model's 36 canvases per touch.
+  struct workspace {
+    Eigen::Array<T, Eigen::Dynamic, 1> channels;
+    // The image size and margin whose zero margins `channels` holds (nothing writes them).
+    Eigen::Index zeroed_rows = -1, zeroed_cols = -1, zeroed_margin = -1;
+    Eigen::Array<T, Eigen::Dynamic, 1> gx, gy;
+    std::vector<detail::dsift::column_span> spans;
+    detail::dsift::span_gradient_scratch<T> gradients;
+    // sample: the pooled rows the grid reads, and where each image row's lands (-1: unused).
+    Eigen::Array<T, Eigen::Dynamic, 1> pooled;
+    std::vector<Eigen::Index> slots;
+  };
+
   /// Number of grid points (rows = down, cols = across) `sample` gives on an image of `size`:
   /// floor((H - patch) / spacing) + 1 by floor((W - patch) / spacing) + 1, or 0 x 0 when the
   /// image is smaller than a patch.
@@ -284,29 +303,44 @@ class dense_sift {
   /// values those patches need are computed. Throws `std::invalid_argument` when the image is
   /// smaller than a patch (no patch fits) or not finite.
   [[nodiscard]] descriptor_samples<T> sample(const image_view<T>& img) const {
+    workspace scratch;
+    descriptor_samples<T> out;
+    sample(img, scratch, out);
+    return out;
+  }
+
+  /// `sample(img)` into `out`, reusing its memory and `scratch`'s: for a caller describing
+  /// many images of one size (every touch of a tactile sensor), no allocation after the first
+  /// but the pooling's own buffers. The same descriptors as `sample(img)`, bit for bit. Throws
+  /// as `sample(img)` does, with `out` then unspecified.
+  void sample(const image_view<T>& img, workspace& scratch, descriptor_samples<T>& out) const {
     check_image(img, "sample");
     const Eigen::Index h = img.rows();
     const Eigen::Index w = img.cols();
     const Eigen::Index s = params_.grid_spacing;
     const pixel_size grid = sample_grid_size({w, h});
-    Eigen::Array<T, Eigen::Dynamic, 1> channels;
-    const T top = orientation_channels(img, channels);
+    Eigen::Array<T, Eigen::Dynamic, 1>& channels = scratch.channels;
+    const T top = with_zero_margins(h, w, scratch, [&](bool zeroed) {
+      return orientation_channels(img, channels, scratch.gx, scratch.gy, zeroed,
+                                  &scratch.gradients);
+    });
 
     // The pooled rows the grid's bins read, and where each lands in `pooled` (-1: unused).
-    std::vector<bool> needed(static_cast<std::size_t>(h), false);
+    std::vector<Eigen::Index>& slot = scratch.slots;
+    slot.assign(static_cast<std::size_t>(h), -1);
     for (Eigen::Index i = 0; i < grid.height; ++i) {
       for (Eigen::Index by = 0; by < NumBins; ++by) {
-        needed[static_cast<std::size_t>(i * s + by * bin_)] = true;
+        slot[static_cast<std::size_t>(i * s + by * bin_)] = 0;
       }
     }
-    std::vector<Eigen::Index> slot(static_cast<std::size_t>(h), -1);
     Eigen::Index n_rows = 0;
-    for (std::size_t y = 0; y < slot.size(); ++y) {
-      if (needed[y]) slot[y] = n_rows++;
+    for (Eigen::Index& k : slot) {
+      if (k == 0) k = n_rows++;
     }
     const Eigen::Index nx = (grid.width - 1) * s + (NumBins - 1) * bin_ + 1;
     const Eigen::Index row_size = nx * NumAngles;
-    Eigen::Array<T, Eigen::Dynamic, 1> pooled(n_rows * row_size);
+    Eigen::Array<T, Eigen::Dynamic, 1>& pooled = scratch.pooled;
+    pooled.resize(n_rows * row_size);
     // The same pooling as `compute`'s, so that every sample is a `compute` column.
     const auto pool_rows = [&](auto& pool) {
       for (Eigen::Index y = 0; y < h; ++y) {
@@ -328,7 +362,6 @@ class dense_sift {
       pool_rows(pool);
     }
 
-    descriptor_samples<T> out;
     out.rows = grid.height;
     out.cols = grid.width;
     out.spacing = s;
@@ -342,7 +375,6 @@ class dense_sift {
       }
     }
     normalise(out.values.data(), out.values.cols());
-    return out;
   }
 
   /// Descriptors of the patches whose top-left pixels are `top_left` (columns, in order), equal to
@@ -359,21 +391,6 @@ class dense_sift {
     return describe_at(img, top_left, scratch);
   }
 
-  /// Scratch memory `describe_at` can reuse between calls (one per thread). Why: the orientation
-  /// channels of a 46 x 46 canvas take 128 KB, glibc serves blocks that large straight from the
-  /// OS, and the fresh pages' faults cost more than computing the channels (measured: 50 us per
-  /// call allocating, 13 us reusing). It also keeps the gradient buffers (no allocation per
-  /// call) and, for images of the size it last saw, the channels' zero margins (not cleared
-  /// again: 62 KB per 46 x 46 canvas). Together 9 % of the pose model's 36 canvases per touch.
-  struct workspace {
-    Eigen::Array<T, Eigen::Dynamic, 1> channels;
-    // The image size and margin whose zero margins `channels` holds (nothing writes them).
-    Eigen::Index zeroed_rows = -1, zeroed_cols = -1, zeroed_margin = -1;
-    Eigen::Array<T, Eigen::Dynamic, 1> gx, gy;
-    std::vector<detail::dsift::column_span> spans;
-    detail::dsift::span_gradient_scratch<T> gradients;
-  };
-
   /// `compute(img)` into `field`, reusing its memory and `scratch`'s: for a caller describing
   /// many images of one size (camera frames, a map prepared again), no allocation after the
   /// first. Fresh memory is what a new field costs most at camera resolution: at 640 x 480 the
@@ -389,7 +406,8 @@ class dense_sift {
     // field).
     Eigen::Array<T, Eigen::Dynamic, 1>& channels = scratch.channels;
     const T top = with_zero_margins(h, w, scratch, [&](bool zeroed) {
-      return orientation_channels(img, channels, scratch.gx, scratch.gy, zeroed);
+      return orientation_channels(img, channels, scratch.gx, scratch.gy, zeroed,
+                                  &scratch.gradients);
     });
 
     // Bin b of the patch at top-left t samples the pooled channels at t + b * bin, for every
@@ -647,10 +665,15 @@ class dense_sift {
     Eigen::Array<T, Eigen::Dynamic, 1> gy;
     return orientation_channels(img, channels, gx, gy);
   }
+  /// `gradients`: the gradient passes' buffers to reuse (null: their own).
   T orientation_channels(const image_view<T>& img, Eigen::Array<T, Eigen::Dynamic, 1>& channels,
                          Eigen::Array<T, Eigen::Dynamic, 1>& gx,
-                         Eigen::Array<T, Eigen::Dynamic, 1>& gy, bool margins_zero = false) const {
-    const Eigen::Index stride = detail::dsift::gradients(img, peak(img), gradient_, gx, gy);
+                         Eigen::Array<T, Eigen::Dynamic, 1>& gy, bool margins_zero = false,
+                         detail::dsift::span_gradient_scratch<T>* gradients = nullptr) const {
+    const Eigen::Index stride =
+        gradients != nullptr
+            ? detail::dsift::gradients(img, peak(img), gradient_, gx, gy, *gradients)
+            : detail::dsift::gradients(img, peak(img), gradient_, gx, gy);
     return detail::dsift::orientation_channels<NumAngles>(gx, gy, img.rows(), img.cols(), stride,
                                                           margin(), cos_a_, sin_a_, params_.alpha,
                                                           channels, nullptr, margins_zero);

@@ -214,6 +214,29 @@ inline void check_tactile_image(const char* who, const image<float>& z, pixel_si
   if (!all_finite(z)) fail(who, ": the tactile image contains NaN or infinite pixels");
 }
 
+/// What `sample(img)` of a descriptor D returns.
+template <class D>
+using sample_result_t = decltype(std::declval<const D&>().sample(
+    std::declval<const image<typename D::scalar_type>&>()));
+
+/// A descriptor that can sample into memory it is given (dense_sift::sample(img, workspace,
+/// out)): the descriptor models then describe a touch without allocating.
+template <class D>
+concept samples_into_workspace = samples_on_grid<D> &&
+    requires(const D& d, const image<typename D::scalar_type>& img, typename D::workspace& w,
+             sample_result_t<D>& out) {
+  d.sample(img, w, out);
+};
+
+/// A descriptor model's memory for describing touches (empty for other descriptors).
+template <class D>
+struct touch_scratch {};
+template <samples_into_workspace D>
+struct touch_scratch<D> {
+  typename D::workspace workspace;
+  sample_result_t<D> samples;
+};
+
 /// The tracking hook's bound on log p(z | x) of the descriptor models (`P`: their parameters,
 /// with shape, tempering, epsilon): distances are >= 0, so the exponential shape's
 /// -tempering d / tau is <= 0 and eq. (2)'s -tempering log(d + epsilon) is
@@ -283,15 +306,33 @@ class descriptor_likelihood {
     detail::check_tactile_image("descriptor_likelihood", z, window_);
     const image<scalar_type> zt = z.template cast<scalar_type>();
     Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> g;
+    describe_touch(zt, nullptr, g);
+    return g;
+  }
+
+ private:
+  // The touch's descriptors into g: with `scratch`, in its memory (no allocation once it has
+  // seen a touch), else in the descriptor's own.
+  void describe_touch(const image<scalar_type>& zt, detail::touch_scratch<Descriptor>* scratch,
+                      descriptor_matrix& g) const {
     // A descriptor that can describe just its spacing grid (dense_sift::sample) saves most of the
     // tactile extraction: 3 of the 25 patch positions of a 42 x 18 image are needed.
     if constexpr (samples_on_grid<Descriptor>) {
       if (descriptor_.grid_spacing() == params_.spacing) {
+        if constexpr (detail::samples_into_workspace<Descriptor>) {
+          if (scratch != nullptr) {
+            descriptor_.sample(zt, scratch->workspace, scratch->samples);
+            TACMAP_ASSERT(scratch->samples.size() == patches_per_window(),
+                          "descriptor::sample returned the wrong number of patches");
+            g = scratch->samples.values;  // grid order = offsets_ order (row-major, same spacing)
+            return;
+          }
+        }
         const auto samples = descriptor_.sample(zt);
         TACMAP_ASSERT(samples.size() == patches_per_window(),
                       "descriptor::sample returned the wrong number of patches");
-        g = samples.values;  // grid order = offsets_ order (row-major, same spacing)
-        return g;
+        g = samples.values;
+        return;
       }
     }
     const auto zf = descriptor_.compute(zt);
@@ -299,15 +340,31 @@ class descriptor_likelihood {
     for (Eigen::Index m = 0; m < patches_per_window(); ++m)
       g.col(m) = zf.at(offsets_[static_cast<std::size_t>(m)].row,
                        offsets_[static_cast<std::size_t>(m)].col);
-    return g;
   }
 
+  // The touch z's descriptors in the stored basis (in_stored_basis(tactile_descriptors(z))), in
+  // the model's memory: valid until the next call. For the sequential paths (the default
+  // update described a touch in 16 allocations).
+  const descriptor_matrix& stored_touch(const measurement_type& z) const {
+    detail::check_tactile_image("descriptor_likelihood", z, window_);
+    touch_image_ = z.template cast<scalar_type>();
+    describe_touch(touch_image_, &touch_scratch_, touch_);
+    if (params_.both_signs && !quantized_) {
+      touch_basis_.resize(touch_.rows(), touch_.cols());
+      for (Eigen::Index j = 0; j < touch_.cols(); ++j)
+        basis_.apply(touch_.col(j), touch_basis_.col(j));
+      return touch_basis_;
+    }
+    return touch_;
+  }
+
+ public:
   /// The distance d(x, z) of eq. (1) for every state (row-major grid order).
   template <class G>
   void distances(const G& grid, const measurement_type& z, belief_array<G>& out)
       const requires std::same_as<typename G::scalar_type, scalar_type> {
     check_grid(grid);
-    const auto g = in_stored_basis(tactile_descriptors(z));
+    const descriptor_matrix& g = stored_touch(z);
     if (params_.contrast == contrast_sign::either_per_patch) {
       // The inverted touch, described like the touch itself (no assumption about the
       // descriptor's layout). It keeps z's range, so a descriptor that divides by the peak
@@ -352,7 +409,7 @@ class descriptor_likelihood {
     // Every image's descriptors side by side, image-major: column k * M + m is image k's patch m.
     auto& all = signs_;
     for (Eigen::Index k = 0; k < count; ++k) {
-      const auto g = in_stored_basis(tactile_descriptors(zs[static_cast<std::size_t>(k)]));
+      const descriptor_matrix& g = stored_touch(zs[static_cast<std::size_t>(k)]);
       if (k == 0) all.resize(g.rows(), count * m_count);
       all.middleCols(k * m_count, m_count) = g;
     }
@@ -413,7 +470,7 @@ class descriptor_likelihood {
             Eigen::Map<Eigen::Array<scalar_type, Eigen::Dynamic, 1>>(out + sign * n, n));
       return;
     }
-    const descriptor_matrix g = in_stored_basis(tactile_descriptors(z));
+    const descriptor_matrix& g = stored_touch(z);
     const Eigen::Index half = basis_.half();
     scalar_type* plus = out;
     scalar_type* minus = out + n;
@@ -511,10 +568,8 @@ class descriptor_likelihood {
     detail::check_tactile_image("descriptor_likelihood", z, window_);
     check_grid(grid);
     const Eigen::Index n = grid.size();
-    const descriptor_matrix g =
-        quantized_ ? descriptor_matrix() : in_stored_basis(tactile_descriptors(z));
-    const std::vector<detail::quantized_query> q =
-        quantized_ ? sign_queries(z) : std::vector<detail::quantized_query>();
+    const descriptor_matrix* g = quantized_ ? nullptr : &stored_touch(z);
+    const std::vector<detail::quantized_query>* q = quantized_ ? &sign_queries(z) : nullptr;
     const Eigen::Index half = basis_.half();
     constexpr Eigen::Index width = detail::descriptor_tiles<scalar_type>::width;
     detail::covering_tiles(states, width, n, tile_ranges_);
@@ -522,11 +577,11 @@ class descriptor_likelihood {
       scalar_type* plus = out + t.begin * width;
       scalar_type* minus = out + n + t.begin * width;
       if (quantized_)
-        quantized_both_signs(q, plus, minus, t);
+        quantized_both_signs(*q, plus, minus, t);
       else
         for (Eigen::Index m = 0; m < patches_per_window(); ++m)
           detail::accumulate_sign_pair_tiles(per_window_[static_cast<std::size_t>(m)].values,
-                                             &g(0, m), half, plus, minus, m > 0, t);
+                                             &(*g)(0, m), half, plus, minus, m > 0, t);
       const state_range p = detail::tile_positions(t, width, n);
       for (Eigen::Index sign = 0; sign < 2; ++sign)
         to_log_likelihood(Eigen::Map<Eigen::Array<scalar_type, Eigen::Dynamic, 1>>(
@@ -568,10 +623,14 @@ class descriptor_likelihood {
   // descriptor's contrast permutation of it: what describing max + min - z gives), quantised.
   // The map stays in its own basis: the sum/difference basis has negative elements, the
   // permutation costs a second multiply-add per byte instead.
-  [[nodiscard]] std::vector<detail::quantized_query> sign_queries(const measurement_type& z) const {
-    const descriptor_matrix g = tactile_descriptors(z);
-    std::vector<detail::quantized_query> q(static_cast<std::size_t>(g.cols()));
-    descriptor_matrix pair(g.rows(), 2);
+  // In the model's memory (valid until the next call): a touch allocates nothing.
+  [[nodiscard]] const std::vector<detail::quantized_query>& sign_queries(
+      const measurement_type& z) const {
+    const descriptor_matrix& g = stored_touch(z);  // quantised: the descriptor's own basis
+    std::vector<detail::quantized_query>& q = sign_queries_;
+    q.resize(static_cast<std::size_t>(g.cols()));
+    descriptor_matrix& pair = sign_pair_;
+    pair.resize(g.rows(), 2);
     for (Eigen::Index m = 0; m < g.cols(); ++m) {
       pair.col(0) = g.col(m);
       for (Eigen::Index k = 0; k < g.rows(); ++k)
@@ -818,6 +877,13 @@ class descriptor_likelihood {
   std::uint64_t clamped_ = 0;                          // map elements clamped by quantisation
   std::vector<Eigen::Index> permutation_;  // quantised both_signs: the contrast permutation
   mutable detail::quantized_query query_;  // the touch quantised, on sequential paths
+  // stored_touch: the touch as scalar_type, its descriptors (and in the stored basis), and the
+  // descriptor's memory for describing it.
+  mutable image<scalar_type> touch_image_;
+  mutable descriptor_matrix touch_, touch_basis_;
+  mutable detail::touch_scratch<Descriptor> touch_scratch_;
+  mutable std::vector<detail::quantized_query> sign_queries_;  // quantised both_signs
+  mutable descriptor_matrix sign_pair_;                        // sign_queries: patch m, +-
   // Per-touch distances, kept between calls so that log_likelihood() does not allocate. This
   // makes one model object non-reentrant: give each thread its own filter.
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> workspace_;

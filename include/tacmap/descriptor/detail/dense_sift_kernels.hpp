@@ -184,6 +184,21 @@ void padded_image(const image_view<T>& img, T scale, Eigen::Index radius, Eigen:
   }
 }
 
+/// Columns [begin, end) of one image row; empty when begin >= end.
+struct column_span {
+  Eigen::Index begin = 0;
+  Eigen::Index end = 0;
+};
+
+/// The buffers `gradients` works in, kept by a caller that describes many images (no
+/// allocation once they have seen an image of the size).
+template <class T>
+struct span_gradient_scratch {
+  Eigen::Array<T, Eigen::Dynamic, 1> padded, dx, sx;
+  std::vector<column_span> out_span, pad_span;
+  std::vector<const T*> src, src_x;
+};
+
 /// Gradients (gx along columns, gy along rows, y downwards) of `img / scale` with Lazebnik's
 /// border handling: 2 mirrored pixels, the mean of that padded image subtracted, zero beyond
 /// (which only a kernel wider than 5 px, sigma_edge > 1, reaches).
@@ -191,25 +206,30 @@ void padded_image(const image_view<T>& img, T scale, Eigen::Index radius, Eigen:
 /// Both passes run over the padded image as one flat array (a row's last 2 * radius outputs
 /// are scratch), so a short tactile row costs no per-row call. Pixel (y, x) of the result is at
 /// y * stride + x with the returned stride = cols + 2 * radius; columns >= cols are scratch.
+/// Its buffers are `scratch`'s.
 template <class T>
 Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>& taps,
                        Eigen::Array<T, Eigen::Dynamic, 1>& gx,
-                       Eigen::Array<T, Eigen::Dynamic, 1>& gy) {
+                       Eigen::Array<T, Eigen::Dynamic, 1>& gy, span_gradient_scratch<T>& scratch) {
   const Eigen::Index h = img.rows();
   const Eigen::Index w = img.cols();
   const Eigen::Index r = taps.radius;
   const Eigen::Index hp = h + 2 * r;
   const Eigen::Index wp = w + 2 * r;
-  Eigen::Array<T, Eigen::Dynamic, 1> padded;
+  Eigen::Array<T, Eigen::Dynamic, 1>& padded = scratch.padded;
   padded_image(img, scale, r, 0, padded);
 
   const auto n_taps = static_cast<std::size_t>(2 * r + 1);
-  std::vector<const T*> src(n_taps);
-  std::vector<const T*> src_x(n_taps);
+  std::vector<const T*>& src = scratch.src;
+  std::vector<const T*>& src_x = scratch.src_x;
+  src.resize(n_taps);
+  src_x.resize(n_taps);
   // Horizontal pass: derivative (for gx) and smoothing (for gy). Output i reads padded
   // i .. i + 2r; the last 2r entries would read past the end and are only scratch: zeroed.
-  Eigen::Array<T, Eigen::Dynamic, 1> dx(hp * wp);
-  Eigen::Array<T, Eigen::Dynamic, 1> sx(hp * wp);
+  Eigen::Array<T, Eigen::Dynamic, 1>& dx = scratch.dx;
+  Eigen::Array<T, Eigen::Dynamic, 1>& sx = scratch.sx;
+  dx.resize(hp * wp);
+  sx.resize(hp * wp);
   for (std::size_t t = 0; t < n_taps; ++t) src[t] = padded.data() + static_cast<Eigen::Index>(t);
   weighted_sum(src.data(), taps.derivative.data(), n_taps, dx.data(), hp * wp - 2 * r);
   weighted_sum(src.data(), taps.smooth.data(), n_taps, sx.data(), hp * wp - 2 * r);
@@ -227,23 +247,20 @@ Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>
   return wp;
 }
 
-/// Columns [begin, end) of one image row; empty when begin >= end.
-struct column_span {
-  Eigen::Index begin = 0;
-  Eigen::Index end = 0;
-};
+/// `gradients` in buffers of its own.
+template <class T>
+Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>& taps,
+                       Eigen::Array<T, Eigen::Dynamic, 1>& gx,
+                       Eigen::Array<T, Eigen::Dynamic, 1>& gy) {
+  span_gradient_scratch<T> scratch;
+  return gradients(img, scale, taps, gx, gy, scratch);
+}
 
 /// `gradients`, valid only at columns [spans[y].begin, spans[y].end) of each image row y (one
 /// span per row; other pixels of gx and gy are unspecified): the same padded image and the same
 /// sums, for the pixels a few patches need instead of all of them. Each pass runs row by row
 /// over the span, widened to whole registers (the widened columns land in the next row or the
 /// scratch columns and are never read as results) so that short spans have no scalar tail.
-template <class T>
-struct span_gradient_scratch {
-  Eigen::Array<T, Eigen::Dynamic, 1> padded, dx, sx;
-  std::vector<column_span> out_span, pad_span;
-  std::vector<const T*> src;
-};
 
 template <class T>
 Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>& taps,
