@@ -6,6 +6,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "tacmap/tacmap.hpp"
@@ -223,6 +224,48 @@ TEST_CASE("estimate(): MAP, mean, covariance and entropy in millimetres") {
   CHECK(e.covariance_mm2(1, 1) == doctest::Approx(0.25 * 0.75 * 16.0));
   CHECK(e.covariance_mm2(0, 1) == doctest::Approx(-0.25 * 0.25 * 16.0));
   CHECK(e.entropy_nats == doctest::Approx(-(0.5 * std::log(0.5) + 0.5 * std::log(0.25))));
+}
+
+TEST_CASE("estimate() on a lattice: the rows' sums give the per-state moments") {
+  // estimate() takes the mean and covariance of a lattice's belief from per-row sums of p, c p
+  // and c^2 p; estimate_per_state sums a 2 x 2 outer product per state. Spiky, flat, edge and
+  // single-state beliefs, planar and latent grids, steps that are not whole millimetres.
+  const auto compare = [](const auto& grid, std::uint32_t seed) {
+    using G = std::decay_t<decltype(grid)>;
+    const tacmap::detail::position_statistics<G> stats(grid);
+    REQUIRE(stats.positions_form_lattice());
+    const Eigen::Index n = grid.size();
+    std::uint32_t state = seed;
+    for (int trial = 0; trial < 5; ++trial) {
+      CAPTURE(trial);
+      Eigen::ArrayXf b(n);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        state = state * 1664525U + 1013904223U;
+        b(i) = trial == 0   ? static_cast<float>(state >> 8) / 16777216.0F
+               : trial == 1 ? ((state >> 8) % 89 == 0 ? 1.0F : 1e-6F)
+               : trial == 2 ? (i % grid.cols() == grid.cols() - 1 ? 1.0F : 0.0F)  // last column
+               : trial == 3 ? (i == n - 1 ? 1.0F : 0.0F)                          // one state
+                            : std::exp(-0.001F * static_cast<float>(i % 997));
+      }
+      b /= b.sum();
+      const typename tacmap::detail::position_statistics<G>::view_type v(b.data(), n);
+      const auto fast = stats.estimate(grid, v);
+      const auto ref = stats.estimate_per_state(grid, v);
+      CHECK((fast.mean_mm - ref.mean_mm).norm() <= 1e-9 * (1.0 + ref.mean_mm.norm()));
+      CHECK((fast.covariance_mm2 - ref.covariance_mm2).norm() <=
+            1e-9 * (1.0 + ref.mean_mm.squaredNorm()));
+      CHECK(fast.map_index == ref.map_index);
+      CHECK(fast.entropy_nats == ref.entropy_nats);
+      CHECK(fast.hypothesis_probability == ref.hypothesis_probability);
+    }
+  };
+  const tacmap::planar_grid<float> paper({.width = 120, .height = 120}, 1.13,
+                                         {.width = 18, .height = 42});
+  compare(paper, 7U);
+  compare(tacmap::planar_grid<float>({.width = 37, .height = 5}, 0.2, {.width = 1, .height = 1}),
+          8U);
+  compare(tacmap::latent_grid<tacmap::planar_grid<float>>(paper, {"as_photographed", "inverted"}),
+          9U);
 }
 
 TEST_CASE("toy localization on a small 2-D map converges to the true state") {
