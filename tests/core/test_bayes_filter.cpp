@@ -255,6 +255,11 @@ TEST_CASE("estimate() on a lattice: the rows' sums give the per-state moments") 
       CHECK((fast.covariance_mm2 - ref.covariance_mm2).norm() <=
             1e-9 * (1.0 + ref.mean_mm.squaredNorm()));
       CHECK(fast.map_index == ref.map_index);
+      // Variances never below 0; a one-state belief's exactly 0 (as the per-state sums give).
+      CHECK(fast.covariance_mm2.diagonal().minCoeff() >= 0.0);
+      if (trial == 3) CHECK(fast.covariance_mm2.isZero(0.0));
+      // Ties keep the first state (as maxCoeff(&index) did): the last column's first cell.
+      if (trial == 2) CHECK(fast.map_index == grid.cols() - 1);
       CHECK(fast.entropy_nats == ref.entropy_nats);
       CHECK(fast.hypothesis_probability == ref.hypothesis_probability);
     }

@@ -159,7 +159,7 @@ TEST_CASE("quantized_distances: two rows per widening only where int16 holds the
   using tacmap::detail::paired_rows_bound;
   CHECK(4 * paired_rows_bound <= 32767);
   CHECK(4 * (paired_rows_bound + 1) > 32767);
-  const Eigen::Index positions = 40;  // one block of 4 tiles, then a single tile
+  const Eigen::Index positions = 40;  // 5 tiles: blocks of 2 (two columns) and a single one
   for (const Eigen::Index dim : {8, 12, 128}) {
     CAPTURE(dim);
     quantized_tiles tiles(positions, dim);
@@ -175,6 +175,11 @@ TEST_CASE("quantized_distances: two rows per widening only where int16 holds the
       CHECK(q.peak(0) == b);
       CHECK(q.peak(1) == b);
       check_against_reference(tiles, q);
+      for (Eigen::Index j = 0; j < 2; ++j) {  // one column: a block of 4 tiles, then one
+        quantized_query one;
+        one.assign(g.col(j));
+        check_against_reference(tiles, one);
+      }
       Eigen::ArrayXXf d(positions, 2);
       float* o[2] = {&d(0, 0), &d(0, 1)};
       tacmap::detail::quantized_distances(tiles, q, o, false, false);
@@ -188,13 +193,17 @@ TEST_CASE("quantized_distances: two rows per widening only where int16 holds the
       }
     }
   }
-  // Peaks differ inside a block: one tile of 127s among tiles of small bytes decides the whole
-  // block (one row per widening against a touch of 100), the blocks without it pair.
+  // Peaks differ inside a block: a tile of 127s among tiles of small bytes (<= 77) decides its
+  // whole block against touches of +-100 (4 x 127 x 100 = 50,800 would wrap), the blocks
+  // without one pair (77 x 100 <= 8,191). Tile 2 is the third of a 4-tile block (one-column
+  // queries) and the first of a 2-tile block (two or three columns); tile 5 the second of
+  // either: a kernel that looked at one tile's peak, or at one column's, would wrap.
   std::mt19937 rng(141);
   std::uniform_real_distribution<float> small(0.0F, 0.3F);
   Eigen::ArrayXXf f(128, 80);
   for (float& v : f.reshaped()) v = small(rng);
   f.middleCols(16, 8).setConstant(0.5F);  // tile 2
+  f.middleCols(40, 8).setConstant(0.5F);  // tile 5
   quantized_tiles mixed(80, 128);
   REQUIRE(mixed.set_columns(0, f.leftCols(37)));  // tiles written in two parts
   REQUIRE(mixed.set_columns(37, f.rightCols(43)));
@@ -204,18 +213,30 @@ TEST_CASE("quantized_distances: two rows per widening only where int16 holds the
       for (Eigen::Index k = 0; k < 128; ++k) top = std::max(top, mixed.at(q, k));
     CAPTURE(t);
     CHECK(mixed.peak(t) == top);
+    CHECK(mixed.peak(t) == (t == 2 || t == 5 ? 127 : top));
+    if (t != 2 && t != 5) CHECK(top <= 77);
   }
-  CHECK(mixed.peak(2) == 127);
-  CHECK(mixed.peak(0) <= 77);
   Eigen::ArrayXXf g(128, 3);
-  for (float& v : g.reshaped()) v = small(rng) - 0.15F;
-  g(5, 1) = 100.0F / 254.0F;
-  g(9, 2) = -100.0F / 254.0F;
+  for (float& v : g.reshaped()) v = small(rng) * 0.1F;  // column 0: small bytes
+  g.col(1).setConstant(100.0F / 254.0F);
+  g.col(2).setConstant(-100.0F / 254.0F);
   quantized_query q;
   q.assign(g);
+  CHECK(q.peak(0) <= 8);
   CHECK(q.peak(1) == 100);
   CHECK(q.peak(2) == 100);
   check_against_reference(mixed, q);
+  for (Eigen::Index j = 1; j < 3; ++j) {
+    CAPTURE(j);
+    quantized_query one;
+    one.assign(g.col(j));
+    check_against_reference(mixed, one);
+    quantized_query two;  // a small column first: the block's touch peak is both columns'
+    Eigen::ArrayXXf pair(128, 2);
+    pair << g.col(0), g.col(j);
+    two.assign(pair);
+    check_against_reference(mixed, two);
+  }
   // Bytes written through store() may be anything: the peaks become 127 (one row per widening).
   (void)mixed.store();
   for (Eigen::Index t = 0; t < mixed.tiles(); ++t) CHECK(mixed.peak(t) == 127);

@@ -317,7 +317,7 @@ class bayes_filter {
 
   /// MAP state, mean, covariance and entropy of the belief, in the map frame (mm); over a
   /// latent grid, of the position marginal, with each hypothesis's posterior (see
-  /// `state_estimate`).
+  /// `state_estimate`). Uses the filter's scratch: not for concurrent calls on one filter.
   [[nodiscard]] estimate_type estimate() const;
 
   /// The belief's probability that the sensor's position (x, y) lies within `radius_mm` of
@@ -531,7 +531,7 @@ bayes_filter<Grid, Motion, Measurement>::bayes_filter(Grid grid, Motion motion,
       scratch_(grid_.size()),
       log_likelihood_(grid_.size()),
       // State coordinates are fixed for the filter's life: cached once (relative to the first
-      // state, which keeps them small) so estimate() is two matrix products, not N grid calls.
+      // state, which keeps them small) so estimate() is passes over the belief, not N grid calls.
       stats_(make_statistics(grid_)) {
   TACMAP_ASSERT(grid_.size() > 0 && grid_.size() % (grid_.rows() * grid_.cols()) == 0,
                 "a state_grid's size must be a positive multiple of rows * cols");

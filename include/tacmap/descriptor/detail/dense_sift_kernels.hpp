@@ -261,7 +261,6 @@ Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>
 /// sums, for the pixels a few patches need instead of all of them. Each pass runs row by row
 /// over the span, widened to whole registers (the widened columns land in the next row or the
 /// scratch columns and are never read as results) so that short spans have no scalar tail.
-
 template <class T>
 Eigen::Index gradients(const image_view<T>& img, T scale, const gradient_taps<T>& taps,
                        const std::vector<column_span>& spans,

@@ -26,7 +26,8 @@ namespace tacmap::detail {
 /// state, which keeps them small) once, so that each statistic is a pass over the belief, not
 /// N grid calls. The belief is passed as a view of `G::size()` values; it need not sum to one
 /// (a block of a larger belief): masses come out in the belief's own units, and `estimate()`
-/// wants a normalised belief. Keeps scratch (`most_probable_disc`): one object per filter.
+/// wants a normalised belief. Keeps scratch (`estimate`, `most_probable_disc`): one object per
+/// filter, not for concurrent calls.
 template <state_grid G>
 class position_statistics {
  public:
@@ -83,6 +84,7 @@ class position_statistics {
     // The largest value first (vectorised), then its first state: maxCoeff(&index) is a scalar
     // chain of dependent compares, a third of estimate() on the paper's grid.
     const scalar_type top = p.maxCoeff();
+    TACMAP_ASSERT(!std::isnan(top), "position_statistics::estimate: the belief holds a NaN");
     Eigen::Index best = 0;
     while (best + 1 < n && !(p(best) >= top)) ++best;
     e.map_probability = static_cast<double>(top);
@@ -101,11 +103,20 @@ class position_statistics {
       if (!on_lattice) {
         typename estimate_type::vector_type mean_offset = estimate_type::vector_type::Zero();
         typename estimate_type::matrix_type second = estimate_type::matrix_type::Zero();
+        double mass = 0.0;
         for (Eigen::Index i = 0; i < n; ++i) {
           const double w = static_cast<double>(p(i));
           const auto o = offsets_mm_.col(i);
+          mass += w;
           mean_offset += w * o;
           second.noalias() += (w * o) * o.transpose();
+        }
+        // Divided by the mass: a float belief sums to 1 only within ~1e-7, and E[o o^T] -
+        // E[o] E[o]^T of unnormalised sums is off by that times |o|^2 (a belief on one column
+        // of the paper's grid had a variance of -1e-3 mm^2).
+        if (mass > 0.0) {
+          mean_offset /= mass;
+          second /= mass;
         }
         e.covariance_mm2 = second - mean_offset * mean_offset.transpose();
         e.mean_mm = origin_mm_ + mean_offset;
@@ -119,8 +130,11 @@ class position_statistics {
 
   // Mean and covariance of a belief over a lattice (position (r, c) at origin + (c sx, r sy)):
   // from the rows' sums of p, c p and c^2 p (one matrix product over the belief in double),
-  // instead of a 2 x 2 outer product per state. The same moments up to the order of the sums
-  // (tested against estimate_per_state).
+  // instead of a 2 x 2 outer product per state. The central moments are taken in index units
+  // and scaled last: whole-number indices make a one-state belief's variance exactly 0 (scaled
+  // first, E[x^2] - E[x]^2 rounded to -4e-12 mm^2). The coordinates are c sx and r sy, not the
+  // cached offsets, which match them within lattice_step's tolerance (1e-6 of a step);
+  // tested against estimate_per_state.
   void lattice_moments(Eigen::Index rows, Eigen::Index cols, view_type p, estimate_type& e) const
       requires(G::dimension == 2) {
     Eigen::MatrixXd& weights = moment_weights_;  // columns: 1, c, c^2
@@ -140,25 +154,33 @@ class position_statistics {
     // Coefficient by coefficient (a vectorised dot product of contiguous rows each): a general
     // matrix product packed the 8,000-value belief first, for three columns.
     per_row.noalias() = belief.lazyProduct(weights);
-    // The belief is normalised: the expectations are the sums themselves.
-    double mc = 0.0, mcc = 0.0, mr = 0.0, mrr = 0.0, mrc = 0.0;
+    double m0 = 0.0, mc = 0.0, mcc = 0.0, mr = 0.0, mrr = 0.0, mrc = 0.0;
     for (Eigen::Index r = 0; r < rows; ++r) {
       const auto y = static_cast<double>(r);
+      m0 += per_row(r, 0);
       mc += per_row(r, 1);
       mcc += per_row(r, 2);
       mr += y * per_row(r, 0);
       mrr += y * y * per_row(r, 0);
       mrc += y * per_row(r, 1);
     }
+    // Expectations: divided by the mass (see estimate's per-state sums).
+    if (m0 > 0.0) {
+      mc /= m0;
+      mcc /= m0;
+      mr /= m0;
+      mrr /= m0;
+      mrc /= m0;
+    }
     const double sx = lattice_step_(0), sy = lattice_step_(1);
     typename estimate_type::vector_type mean_offset = estimate_type::vector_type::Zero();
     mean_offset(0) = sx * mc;
     mean_offset(1) = sy * mr;
-    typename estimate_type::matrix_type second = estimate_type::matrix_type::Zero();
-    second(0, 0) = sx * sx * mcc;
-    second(1, 1) = sy * sy * mrr;
-    second(0, 1) = second(1, 0) = sx * sy * mrc;
-    e.covariance_mm2 = second - mean_offset * mean_offset.transpose();
+    typename estimate_type::matrix_type cov = estimate_type::matrix_type::Zero();
+    cov(0, 0) = sx * sx * std::max(mcc - mc * mc, 0.0);
+    cov(1, 1) = sy * sy * std::max(mrr - mr * mr, 0.0);
+    cov(0, 1) = cov(1, 0) = sx * sy * (mrc - mr * mc);
+    e.covariance_mm2 = cov;
     e.mean_mm = origin_mm_ + mean_offset;
   }
 
