@@ -349,13 +349,9 @@ class descriptor_likelihood {
     detail::check_tactile_image("descriptor_likelihood", z, window_);
     touch_image_ = z.template cast<scalar_type>();
     describe_touch(touch_image_, &touch_scratch_, touch_);
-    if (params_.both_signs && !quantized_) {
-      touch_basis_.resize(touch_.rows(), touch_.cols());
-      for (Eigen::Index j = 0; j < touch_.cols(); ++j)
-        basis_.apply(touch_.col(j), touch_basis_.col(j));
-      return touch_basis_;
-    }
-    return touch_;
+    if (!stored_in_contrast_basis()) return touch_;
+    to_stored_basis(touch_, touch_basis_);
+    return touch_basis_;
   }
 
  public:
@@ -706,9 +702,15 @@ class descriptor_likelihood {
   template <class Derived>
   [[nodiscard]] descriptor_matrix in_stored_basis(const Eigen::DenseBase<Derived>& columns) const {
     descriptor_matrix out = columns;
-    if (params_.both_signs && !quantized_)
-      for (Eigen::Index j = 0; j < out.cols(); ++j) basis_.apply(columns.col(j), out.col(j));
+    if (stored_in_contrast_basis()) to_stored_basis(columns, out);
     return out;
+  }
+  [[nodiscard]] bool stored_in_contrast_basis() const { return params_.both_signs && !quantized_; }
+  // out = the contrast basis of `columns`, column by column (out sized here; not aliased).
+  template <class Derived>
+  void to_stored_basis(const Eigen::DenseBase<Derived>& columns, descriptor_matrix& out) const {
+    out.resize(columns.rows(), columns.cols());
+    for (Eigen::Index j = 0; j < out.cols(); ++j) basis_.apply(columns.col(j), out.col(j));
   }
 
   // Distances -> eq. (2) or the exponential, times tempering, in place.
