@@ -658,7 +658,8 @@ void check_normalise(Eigen::Index count, unsigned seed, double tolerance) {
 }  // namespace
 
 TEST_CASE("normalise_simd equals the scalar normalisation (both branches, any count)") {
-  for (Eigen::Index count : {0, 1, 3, 7, 8, 9, 16, 29}) {
+  // Past 8 registers: normalise_chunk's chunks (a whole one, one more, a partial one).
+  for (Eigen::Index count : {0, 1, 3, 7, 8, 9, 16, 29, 31, 32, 33, 63, 64, 65, 130}) {
     check_normalise<32, float>(count, static_cast<unsigned>(count) + 1U, 1e-6);
     check_normalise<128, float>(count, static_cast<unsigned>(count) + 2U, 1e-6);
     check_normalise<32, double>(count, static_cast<unsigned>(count) + 3U, 1e-12);
@@ -703,7 +704,7 @@ TEST_CASE("assemble_normalise_simd equals assembling and the scalar normalisatio
     }
     CHECK(worst <= 1e-6);
   };
-  for (Eigen::Index count : {1, 5, 8, 13, 40}) {
+  for (Eigen::Index count : {1, 5, 8, 13, 40, 63, 64, 65, 103, 129}) {
     check(std::integral_constant<int, 2>{}, std::integral_constant<int, 8>{}, 9, count, 5U);
     check(std::integral_constant<int, 4>{}, std::integral_constant<int, 8>{}, 4, count, 6U);
   }

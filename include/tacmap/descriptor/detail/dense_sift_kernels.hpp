@@ -845,48 +845,67 @@ void normalise_eigen(T* data, Eigen::Index count, T threshold, T clamp) {
 
 namespace tacmap::detail::dsift {
 
-/// One register's worth of descriptors (`group` <= its width, the rest of the register unused),
-/// normalised as `normalise` does, written to out + j * Size: load(j, i) gives elements
-/// [i, i + width) of descriptor j before normalisation, norm2 their squared norms (lane j).
-/// Weak descriptors (norm <= threshold) take the same path with scale 1 and no clamp, which
-/// leaves them exactly as they are; the clamped norms' horizontal sums are taken for the whole
-/// register at once (a transpose-and-add tree, xsimd::haddp).
-template <class A, int Size, class T, class Load>
-inline void normalise_group(const Load& load, xsimd::batch<T, A> norm2, Eigen::Index group,
+/// Descriptors 0..count-1 of a chunk (count <= chunk_groups registers' width), normalised as
+/// `normalise` does, written to out + j * Size: load(j, i) gives elements [i, i + width) of
+/// descriptor j before normalisation, norm2[g] the squared norms of descriptors
+/// [g width, (g + 1) width) (lane j). Weak descriptors (norm <= threshold) take the same path
+/// with scale 1 and no clamp, which leaves them exactly as they are; the clamped norms'
+/// horizontal sums are taken for a whole register at once (a transpose-and-add tree,
+/// xsimd::haddp).
+///
+/// Why a chunk of registers, each step over all of them before the next: a register's two
+/// sqrt-and-divide chains (first norm, then the clamped one) are about 60 cycles of latency
+/// against some 40 of arithmetic per descriptor register; step by step over several registers
+/// they overlap (perf at 120 px: the divisions and the compares waiting on them were a quarter
+/// of the pass). The same operations on the same values as one register at a time: bit for bit.
+template <class A, int Size, int ChunkGroups, class T, class Load>
+inline void normalise_chunk(const Load& load, const xsimd::batch<T, A>* norm2, Eigen::Index count,
                             T threshold, T clamp, T* out) {
   using batch = xsimd::batch<T, A>;
   constexpr auto width = static_cast<Eigen::Index>(batch::size);
+  constexpr auto lanes = static_cast<std::size_t>(ChunkGroups) * batch::size;
+  const Eigen::Index groups = (count + width - 1) / width;
   const batch one(T(1));
-  const batch norm = xsimd::sqrt(norm2);
-  const auto strong = norm > batch(threshold);
-  alignas(batch) std::array<T, batch::size> scale{};
-  alignas(batch) std::array<T, batch::size> limit{};
+  alignas(batch) std::array<T, lanes> scale{};
+  alignas(batch) std::array<T, lanes> limit{};
+  alignas(batch) std::array<T, lanes> renorm{};
   alignas(batch) std::array<batch, batch::size> sums;
-  // 1 / max(norm, smallest normal) stays finite (as `normalise`).
-  xsimd::select(strong, one / xsimd::max(norm, batch(std::numeric_limits<T>::min())), one)
-      .store_aligned(scale.data());
-  xsimd::select(strong, batch(clamp), batch(std::numeric_limits<T>::infinity()))
-      .store_aligned(limit.data());
+  for (Eigen::Index g = 0; g < groups; ++g) {
+    const batch norm = xsimd::sqrt(norm2[g]);
+    const auto strong = norm > batch(threshold);
+    // 1 / max(norm, smallest normal) stays finite (as `normalise`).
+    xsimd::select(strong, one / xsimd::max(norm, batch(std::numeric_limits<T>::min())), one)
+        .store_aligned(scale.data() + g * width);
+    xsimd::select(strong, batch(clamp), batch(std::numeric_limits<T>::infinity()))
+        .store_aligned(limit.data() + g * width);
+  }
   // The clamped norms first, then each element computed again and stored once, scaled: one
   // store per element instead of a store, a reload and a second store (the fused pass of
   // `compute` about 10 % faster by perf samples at 120 px; the same values bit for bit).
-  for (Eigen::Index j = 0; j < group; ++j) {
-    const batch s(scale[static_cast<std::size_t>(j)]);
-    const batch l(limit[static_cast<std::size_t>(j)]);
-    batch acc(T(0));
-    for (Eigen::Index i = 0; i < Size; i += width) {
-      const batch v = xsimd::min(load(j, i) * s, l);
-      acc = xsimd::fma(v, v, acc);
+  for (Eigen::Index g = 0; g < groups; ++g) {
+    const Eigen::Index first = g * width, group = std::min(width, count - first);
+    for (Eigen::Index j = 0; j < group; ++j) {
+      const auto k = static_cast<std::size_t>(first + j);
+      const batch s(scale[k]);
+      const batch l(limit[k]);
+      batch acc(T(0));
+      for (Eigen::Index i = 0; i < Size; i += width) {
+        const batch v = xsimd::min(load(first + j, i) * s, l);
+        acc = xsimd::fma(v, v, acc);
+      }
+      sums[static_cast<std::size_t>(j)] = acc;
     }
-    sums[static_cast<std::size_t>(j)] = acc;
+    for (Eigen::Index j = group; j < width; ++j) sums[static_cast<std::size_t>(j)] = one;
+    xsimd::haddp(sums.data()).store_aligned(renorm.data() + first);
   }
-  for (Eigen::Index j = group; j < width; ++j) sums[static_cast<std::size_t>(j)] = one;
-  alignas(batch) std::array<T, batch::size> renorm{};
-  xsimd::select(strong, one / xsimd::sqrt(xsimd::haddp(sums.data())), one)
-      .store_aligned(renorm.data());
+  for (Eigen::Index g = 0; g < groups; ++g) {
+    T* r = renorm.data() + g * width;
+    const auto strong = xsimd::sqrt(norm2[g]) > batch(threshold);
+    xsimd::select(strong, one / xsimd::sqrt(batch::load_aligned(r)), one).store_aligned(r);
+  }
   // min(v s, l) n = min(v (s n), l n) for n > 0 (rounding is monotone), one multiply fewer per
   // register; v (s n) and (v s) n may differ in the last bit (weak descriptors: s = n = 1, exact).
-  for (Eigen::Index j = 0; j < group; ++j) {
+  for (Eigen::Index j = 0; j < count; ++j) {
     const auto k = static_cast<std::size_t>(j);
     const batch sn(scale[k] * renorm[k]);
     const batch ln(limit[k] * renorm[k]);
@@ -896,6 +915,11 @@ inline void normalise_group(const Load& load, xsimd::batch<T, A> norm2, Eigen::I
     }
   }
 }
+
+/// Registers of descriptors per `normalise_chunk`: enough to overlap the sqrt-and-divide
+/// chains, few enough for its arrays to stay under 1 KB (8: 157 us for the 120 px field, 4: 159,
+/// 2: 161, 1 (before): 173, one run).
+inline constexpr int normalise_chunk_groups = 8;
 
 /// Whether the hand-vectorised normalisation serves descriptors of `Size` elements of T on the
 /// header's architecture (whole registers); otherwise the Eigen version runs.
@@ -911,26 +935,32 @@ template <class A, int Size, class T>
 void normalise_simd(T* data, Eigen::Index count, T threshold, T clamp) {
   using batch = xsimd::batch<T, A>;
   constexpr auto width = static_cast<Eigen::Index>(batch::size);
+  constexpr Eigen::Index chunk = normalise_chunk_groups * width;
   static_assert(Size % width == 0, "a descriptor must be whole registers");
   alignas(batch) std::array<batch, batch::size> sums;
-  for (Eigen::Index c0 = 0; c0 < count; c0 += width) {
-    const Eigen::Index group = std::min(width, count - c0);
+  std::array<batch, normalise_chunk_groups> norm2;
+  for (Eigen::Index c0 = 0; c0 < count; c0 += chunk) {
+    const Eigen::Index n = std::min(chunk, count - c0);
     T* block = data + c0 * Size;
-    for (Eigen::Index j = 0; j < width; ++j) {
-      batch acc(T(0));
-      if (j < group) {
-        for (Eigen::Index i = 0; i < Size; i += width) {
-          const batch v = batch::load_unaligned(block + j * Size + i);
-          acc = xsimd::fma(v, v, acc);
+    for (Eigen::Index g = 0; g * width < n; ++g) {
+      for (Eigen::Index j = 0; j < width; ++j) {
+        const Eigen::Index at = g * width + j;
+        batch acc(T(0));
+        if (at < n) {
+          for (Eigen::Index i = 0; i < Size; i += width) {
+            const batch v = batch::load_unaligned(block + at * Size + i);
+            acc = xsimd::fma(v, v, acc);
+          }
         }
+        sums[static_cast<std::size_t>(j)] = acc;
       }
-      sums[static_cast<std::size_t>(j)] = acc;
+      norm2[static_cast<std::size_t>(g)] = xsimd::haddp(sums.data());
     }
-    normalise_group<A, Size>(
+    normalise_chunk<A, Size, normalise_chunk_groups>(
         [block](Eigen::Index j, Eigen::Index i) {
           return batch::load_unaligned(block + j * Size + i);
         },
-        xsimd::haddp(sums.data()), group, threshold, clamp, block);
+        norm2.data(), n, threshold, clamp, block);
   }
 }
 
@@ -1005,20 +1035,26 @@ void assemble_normalise_simd(const T* const* rows, const T* const* squares, Eige
   constexpr auto width = static_cast<Eigen::Index>(batch::size);
   constexpr Eigen::Index size = NumBins * NumBins * NumAngles;
   static_assert(NumAngles % width == 0, "a bin must be whole registers");
-  for (Eigen::Index c0 = 0; c0 < count; c0 += width) {
-    batch norm2(T(0));
-    for (Eigen::Index bx = 0; bx < NumBins; ++bx) {
-      for (Eigen::Index by = 0; by < NumBins; ++by) {
-        norm2 += batch::load_unaligned(squares[by] + c0 + bx * bin);
+  constexpr Eigen::Index chunk = normalise_chunk_groups * width;
+  std::array<batch, normalise_chunk_groups> norm2;
+  for (Eigen::Index c0 = 0; c0 < count; c0 += chunk) {
+    const Eigen::Index n = std::min(chunk, count - c0);
+    for (Eigen::Index g = 0; g * width < n; ++g) {
+      batch sum(T(0));
+      for (Eigen::Index bx = 0; bx < NumBins; ++bx) {
+        for (Eigen::Index by = 0; by < NumBins; ++by) {
+          sum += batch::load_unaligned(squares[by] + c0 + g * width + bx * bin);
+        }
       }
+      norm2[static_cast<std::size_t>(g)] = sum;
     }
-    normalise_group<A, size>(
+    normalise_chunk<A, size, normalise_chunk_groups>(
         [rows, bin, c0](Eigen::Index j, Eigen::Index i) {
           const Eigen::Index b = i / NumAngles;  // bin b = by + NumBins * bx
           return batch::load_unaligned(rows[b % NumBins] +
                                        (c0 + j + (b / NumBins) * bin) * NumAngles + i % NumAngles);
         },
-        norm2, std::min(width, count - c0), threshold, clamp, out + c0 * size);
+        norm2.data(), n, threshold, clamp, out + c0 * size);
   }
 }
 
