@@ -279,8 +279,7 @@ class odometry_gaussian {
                 sx - fx_floor, sy - fy_floor, grid.mm_to_px(params_.sigma_mm));
       const grid_box c = detail::clip_box(w, rows, cols);
       const auto kept = out_box.block(c.row - w.row, c.col - w.col, c.rows, c.cols);
-      if (c.rows != w.rows || c.cols != w.cols)
-        dropped += static_cast<double>(out_box.sum()) - static_cast<double>(kept.sum());
+      if (c.rows != w.rows || c.cols != w.cols) dropped += detail::mass_outside(out_box, w, c);
       img.block(c.row, c.col, c.rows, c.cols) += kept;
       at += w.rows * w.cols;
       w = c;

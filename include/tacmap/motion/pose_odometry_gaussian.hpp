@@ -262,8 +262,7 @@ class pose_odometry_gaussian {
           const Eigen::Map<const image<T>> from(moved.data() + at + a * h * w, h, w);
           const auto kept = from.block(c.row - win.row, c.col - win.col, c.rows, c.cols);
           if (c.rows != h || c.cols != w)
-            dropped += static_cast<double>(weight) *
-                       (static_cast<double>(from.sum()) - static_cast<double>(kept.sum()));
+            dropped += static_cast<double>(weight) * detail::mass_outside(from, win, c);
           img.block(c.row, c.col, c.rows, c.cols) += kept * weight;
         }
       }
