@@ -94,6 +94,16 @@ void predict_wide(benchmark::State& state) {
 }
 BENCHMARK(predict_wide);
 
+// The wide component's spread, in mm (argument): radius 2, 3, 4, 5, 7 and 10 px of the paper's
+// 1.13 mm grid. Small radii sum the taps directly, larger ones use sliding sums
+// (robust_motion's `direct_radius`): this row is where the two were compared.
+void predict_wide_sigma(benchmark::State& state) {
+  predict_robust_with(state, {.lost_probability = 0.001,
+                              .wide_probability = 0.1,
+                              .wide_sigma_mm = static_cast<double>(state.range(0))});
+}
+BENCHMARK(predict_wide_sigma)->Arg(3)->Arg(4)->Arg(5)->Arg(6)->Arg(9)->Arg(12);
+
 // The confidence of the estimate (filter/confidence.hpp): the most probable 5 mm disc and its
 // mass, after every touch.
 void assess_paper(benchmark::State& state) {
