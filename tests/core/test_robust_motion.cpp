@@ -187,6 +187,54 @@ TEST_CASE("robust_motion: the wide blur equals a direct 2-D convolution with thr
   }
 }
 
+TEST_CASE("robust_motion: one model on two grids whose padded planes have the same shape") {
+  // 20 x 20 states at 1 mm (radius 1 for 1 mm) and 18 x 18 at 0.5 mm (radius 2): both blur in
+  // 22 x 22 padded planes, with the margins in different places. The second grid's blur must
+  // not read the first one's values where its own margins are.
+  using grid_type = tacmap::planar_grid<float>;
+  const grid_type first({.width = 22, .height = 22}, 1.0, {.width = 3, .height = 3});
+  const grid_type second({.width = 20, .height = 20}, 0.5, {.width = 3, .height = 3});
+  REQUIRE(first.cols() + 2 == second.cols() + 4);
+  struct identity {
+    using control_type = tacmap::odometry;
+    tacmap::prediction_report predict(const grid_type&, const tacmap::belief_array<grid_type>& a,
+                                      tacmap::belief_array<grid_type>& b,
+                                      const control_type&) const {
+      b = a;
+      return {};
+    }
+  };
+  const double w = 0.5;
+  const tacmap::robust_motion<identity> wide({}, {.wide_probability = w, .wide_sigma_mm = 1.0});
+  tacmap::belief_array<grid_type> in_first = tacmap::belief_array<grid_type>::Constant(
+      first.size(), 1.0F / static_cast<float>(first.size()));
+  tacmap::belief_array<grid_type> out_first(first.size());
+  wide.predict(first, in_first, out_first, {});
+  tacmap::belief_array<grid_type> in_second(second.size());
+  for (Eigen::Index i = 0; i < in_second.size(); ++i)
+    in_second(i) = 1.0F + static_cast<float>((i * 29) % 7);
+  in_second /= in_second.sum();
+  tacmap::belief_array<grid_type> got(second.size());
+  wide.predict(second, in_second, got, {});
+  std::vector<double> blurred(static_cast<std::size_t>(in_second.size()));
+  for (Eigen::Index i = 0; i < in_second.size(); ++i)
+    blurred[static_cast<std::size_t>(i)] = static_cast<double>(in_second(i));
+  blurred = three_box_blur(blurred, second.rows(), second.cols(), 2);
+  double total = 0.0;
+  std::vector<double> want(blurred.size());
+  for (Eigen::Index i = 0; i < in_second.size(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    want[k] = (1 - w) * static_cast<double>(in_second(i)) + w * blurred[k];
+    total += want[k];
+  }
+  double worst = 0.0;
+  for (Eigen::Index i = 0; i < got.size(); ++i) {
+    const double v = want[static_cast<std::size_t>(i)] / total;
+    worst = std::max(worst, std::abs(static_cast<double>(got(i)) - v) / v);
+  }
+  CHECK(worst <= 1e-5);
+}
+
 TEST_CASE("robust_motion: on a latent pose grid the wide component blurs every heading's layer") {
   // 2 hypotheses x 3 headings x (9 x 12) positions at 1 mm per px; no motion noise to speak of.
   // Each layer is blurred on its own (an outlier moves the sensor, not its heading or the

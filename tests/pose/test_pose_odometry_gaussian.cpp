@@ -492,20 +492,27 @@ TEST_CASE("mass_outside sums a window's strips outside its clipped part") {
   Eigen::ArrayXXf w(5, 6);
   for (Eigen::Index r = 0; r < 5; ++r)
     for (Eigen::Index c = 0; c < 6; ++c) w(r, c) = static_cast<float>(1 + r * 6 + c);
-  const tacmap::grid_box win{.row = -2, .col = 3, .rows = 5, .cols = 6};
-  for (const auto& [rows, cols] :
-       {std::pair{3, 7}, std::pair{10, 7}, std::pair{2, 5}, std::pair{10, 100}, std::pair{0, 4}}) {
-    CAPTURE(rows);
-    CAPTURE(cols);
-    const tacmap::grid_box in = tacmap::detail::clip_box(win, rows, cols);
-    double expected = 0.0;
-    for (Eigen::Index r = 0; r < 5; ++r)
-      for (Eigen::Index c = 0; c < 6; ++c) {
-        const Eigen::Index gr = win.row + r, gc = win.col + c;
-        const bool inside = gr >= 0 && gr < rows && gc >= 0 && gc < cols;
-        if (!inside) expected += w(r, c);
-      }
-    CHECK(tacmap::detail::mass_outside(w, win, in) == expected);
+  // Windows overhanging the top, the left, every side, or (on large grids) nothing.
+  const tacmap::grid_box windows[] = {{.row = -2, .col = 3, .rows = 5, .cols = 6},
+                                      {.row = 1, .col = -4, .rows = 5, .cols = 6},
+                                      {.row = -1, .col = -1, .rows = 5, .cols = 6}};
+  for (const tacmap::grid_box& win : windows) {
+    for (const auto& [rows, cols] : {std::pair{3, 7}, std::pair{10, 7}, std::pair{2, 5},
+                                     std::pair{10, 100}, std::pair{0, 4}, std::pair{3, 4}}) {
+      CAPTURE(win.row);
+      CAPTURE(win.col);
+      CAPTURE(rows);
+      CAPTURE(cols);
+      const tacmap::grid_box in = tacmap::detail::clip_box(win, rows, cols);
+      double expected = 0.0;
+      for (Eigen::Index r = 0; r < 5; ++r)
+        for (Eigen::Index c = 0; c < 6; ++c) {
+          const Eigen::Index gr = win.row + r, gc = win.col + c;
+          const bool inside = gr >= 0 && gr < rows && gc >= 0 && gc < cols;
+          if (!inside) expected += w(r, c);
+        }
+      CHECK(tacmap::detail::mass_outside(w, win, in) == expected);
+    }
   }
 }
 

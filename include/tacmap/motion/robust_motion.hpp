@@ -17,6 +17,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <type_traits>
@@ -166,13 +167,15 @@ class robust_motion {
   const float* blur_direct(const Img& img, Eigen::Index rx, Eigen::Index ry) const {
     const Eigen::Index rows = img.rows(), cols = img.cols();
     const Eigen::Index stride = cols + 2 * rx, height = rows + 2 * ry;
-    if (padded_rows_ != height || padded_cols_ != stride) {
+    // The margins' place depends on the radii as well as the padded shape (20 columns with
+    // rx = 1 and 18 with rx = 2 are both 22 wide): zeroed again whenever any of them changes.
+    const std::array<Eigen::Index, 4> shape{rows, cols, rx, ry};
+    if (padded_shape_ != shape) {
       padded_a_.assign(static_cast<std::size_t>(height * stride), 0.0F);
       padded_b_.assign(padded_a_.size(), 0.0F);
       row_a_.assign(static_cast<std::size_t>(stride), 0.0F);
       row_b_.assign(static_cast<std::size_t>(stride), 0.0F);
-      padded_rows_ = height;
-      padded_cols_ = stride;
+      padded_shape_ = shape;
     }
     float* a = padded_a_.data();
     float* b = padded_b_.data();
@@ -205,7 +208,8 @@ class robust_motion {
     const Eigen::Index taps = 2 * r + 1;
     Eigen::Index c = 0;
     // Four registers of outputs side by side: four independent chains of adds, so the loop
-    // runs at the loads' pace rather than the adds' latency (7.4 -> ... us a plane).
+    // runs at the loads' pace rather than the adds' latency (a predict on the paper's grid:
+    // 24.2 -> 20.1 us).
     for (; c + 4 * width <= n; c += 4 * width) {
       const float* t = in + c;
       batch s0 = batch::load_unaligned(t), s1 = batch::load_unaligned(t + width);
@@ -280,10 +284,10 @@ class robust_motion {
   // the passes' other buffer, the running sum of rows.
   mutable image<double> down_, across_, scratch_;
   mutable std::vector<double> row_sum_;
-  // The direct blur's two padded planes, two padded rows, and their shape (margins zeroed
-  // once per shape).
+  // The direct blur's two padded planes, two padded rows, and the plane's shape and radii they
+  // were zeroed for.
   mutable std::vector<float> padded_a_, padded_b_, row_a_, row_b_;
-  mutable Eigen::Index padded_rows_ = 0, padded_cols_ = 0;
+  mutable std::array<Eigen::Index, 4> padded_shape_{};  // rows, cols, rx, ry
 };
 
 }  // namespace tacmap

@@ -917,7 +917,7 @@ inline void normalise_chunk(const Load& load, const xsimd::batch<T, A>* norm2, E
 }
 
 /// Registers of descriptors per `normalise_chunk`: enough to overlap the sqrt-and-divide
-/// chains, few enough for its arrays to stay under 1 KB (8: 157 us for the 120 px field, 4: 159,
+/// chains, few enough for its arrays to stay about 1 KB (8: 157 us for the 120 px field, 4: 159,
 /// 2: 161, 1 (before): 173, one run).
 inline constexpr int normalise_chunk_groups = 8;
 
@@ -927,9 +927,10 @@ template <int Size, class T>
 inline constexpr bool simd_normalise =
     Size % static_cast<int>(xsimd::batch<T, kernel_arch<T>>::size) == 0;
 
-/// `normalise` hand-vectorised (A's registers, Size a multiple of their width): a register's
-/// worth of descriptors at a time, their squared norms reduced together with xsimd::haddp
-/// instead of one horizontal sum per descriptor and pass (about 85 instructions per 32-float
+/// `normalise` hand-vectorised (A's registers, Size a multiple of their width): a chunk of
+/// `normalise_chunk_groups` registers' worth of descriptors at a time (`normalise_chunk`), each
+/// register's squared norms reduced together with xsimd::haddp instead of one horizontal sum
+/// per descriptor and pass (about 85 instructions per 32-float
 /// descriptor before). Equal to `normalise_scalar` up to the order of the sums.
 template <class A, int Size, class T>
 void normalise_simd(T* data, Eigen::Index count, T threshold, T clamp) {
