@@ -71,6 +71,18 @@ void planar_touch_default_filter(benchmark::State& state) {
 }
 BENCHMARK(planar_touch_default_filter)->Unit(benchmark::kMicrosecond);
 
+// The same filter with robust motion switched off (no floor, no wide component): the issue's
+// "per-touch cost at most 1.2 x" is planar_touch_default_filter against this, same run.
+void planar_touch_default_filter_no_robust(benchmark::State& state) {
+  const auto map = bench_map();
+  tacmap::localizer_config config;
+  config.lost_probability = 0.0;
+  config.wide_probability = 0.0;
+  auto filter = tacmap::make_planar_filter(config, map, 3.4 / 3.0, {.width = 18, .height = 42});
+  time_touches(state, filter, map, {.dx_mm = 4.5, .dy_mm = 0.0}, {.dx_mm = -4.5, .dy_mm = 0.0});
+}
+BENCHMARK(planar_touch_default_filter_no_robust)->Unit(benchmark::kMicrosecond);
+
 void planar_touch_localizer(benchmark::State& state) {
   const auto map = bench_map();
   tacmap::localizer loc(map, 3.4 / 3.0);

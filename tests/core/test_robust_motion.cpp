@@ -124,11 +124,13 @@ TEST_CASE("robust_motion: the wide component adds w r (r + 1) px^2 of variance p
 // The blur of robust_motion<identity> on a rows x cols planar grid of scalar T, against
 // `three_box_blur` in double: a non-square grid with mass near every edge, so that the mass
 // dropped at the border, both axes' passes and (for the sliding sums) the transposed pass are
-// all exercised. sigma_mm at 1 mm per px gives radius r = box_radius(sigma).
+// all exercised. sigma_mm at 1 mm per px gives radius r = box_radius(sigma). With a floor
+// `lambda`, renormalised and floored in one pass: (1 - lambda) mix / sum(mix) + lambda / N.
 template <class T>
-void check_wide_blur(double sigma_mm, Eigen::Index r, double tolerance) {
+void check_wide_blur(double sigma_mm, Eigen::Index r, double tolerance, double lambda = 0.0) {
   CAPTURE(sigma_mm);
   CAPTURE(r);
+  CAPTURE(lambda);
   using grid_type = tacmap::planar_grid<T>;
   const grid_type grid({.width = 40, .height = 23}, 1.0, {.width = 3, .height = 3});
   const Eigen::Index rows = grid.rows(), cols = grid.cols();
@@ -148,8 +150,8 @@ void check_wide_blur(double sigma_mm, Eigen::Index r, double tolerance) {
     }
   };
   const double w = 0.3;
-  const tacmap::robust_motion<identity> wide({},
-                                             {.wide_probability = w, .wide_sigma_mm = sigma_mm});
+  const tacmap::robust_motion<identity> wide(
+      {}, {.lost_probability = lambda, .wide_probability = w, .wide_sigma_mm = sigma_mm});
   tacmap::belief_array<grid_type> got(grid.size());
   // Twice: the second prediction reuses the scratch (whose margins must still be zero).
   for (int round = 0; round < 2; ++round) {
@@ -168,7 +170,8 @@ void check_wide_blur(double sigma_mm, Eigen::Index r, double tolerance) {
     }
     double worst = 0.0;
     for (Eigen::Index i = 0; i < in.size(); ++i) {
-      const double v = want[static_cast<std::size_t>(i)] / total;
+      const double v = (1.0 - lambda) * want[static_cast<std::size_t>(i)] / total +
+                       lambda / static_cast<double>(in.size());
       worst = std::max(worst, std::abs(static_cast<double>(got(i)) - v) / v);
     }
     CHECK(worst <= tolerance);
@@ -184,6 +187,8 @@ TEST_CASE("robust_motion: the wide blur equals a direct 2-D convolution with thr
   for (const auto& [sigma, r] : spreads) {
     check_wide_blur<float>(sigma, r, 1e-5);
     check_wide_blur<double>(sigma, r, 1e-12);
+    check_wide_blur<float>(sigma, r, 1e-5, 0.01);
+    check_wide_blur<double>(sigma, r, 1e-12, 0.01);
   }
 }
 

@@ -103,22 +103,19 @@ class robust_motion {
       const auto keep = static_cast<scalar>(1.0 - w);
       // Float beliefs: direct sums for small radii; double beliefs keep the double sums.
       const bool direct = std::is_same_v<scalar, float> && std::max(rx, ry) <= direct_radius;
+      // The planes' mass after mixing, summed while they are written: the normalisation below
+      // needs no pass of its own.
+      double total = 0.0;
       for (Eigen::Index at = 0; at < out.size(); at += plane) {
         Eigen::Map<image<scalar>> img(out.data() + at, rows, cols);
-        if (direct) {
-          const float* blurred_plane = blur_direct(img, rx, ry);
-          // The passes summed 2 r + 1 values each without dividing: (2 rx + 1)^3 (2 ry + 1)^3.
-          const double norm = std::pow(static_cast<double>(2 * rx + 1), -3.0) *
-                              std::pow(static_cast<double>(2 * ry + 1), -3.0);
-          const auto scale = static_cast<scalar>(w * norm);
-          const Eigen::Index stride = cols + 2 * rx;
-          for (Eigen::Index i = 0; i < rows; ++i) {
-            const float* blurred = blurred_plane + (i + ry) * stride + rx;
-            scalar* o = img.data() + i * cols;
-            for (Eigen::Index c = 0; c < cols; ++c)
-              o[c] = o[c] * keep + static_cast<scalar>(blurred[c]) * scale;
+        if constexpr (std::is_same_v<scalar, float>) {
+          if (direct) {
+            // The passes summed 2 r + 1 values each without dividing: (2 rx + 1)^3 (2 ry + 1)^3.
+            const double norm = std::pow(static_cast<double>(2 * rx + 1), -3.0) *
+                                std::pow(static_cast<double>(2 * ry + 1), -3.0);
+            total += blur_direct_mix(img, rx, ry, keep, static_cast<float>(w * norm));
+            continue;
           }
-          continue;
         }
         // Wide radii: sliding sums in double, whole rows at a time (vectorised); the plane is
         // transposed once so both axes run that way.
@@ -127,8 +124,17 @@ class robust_motion {
         across_ = down_.transpose();
         box3_down(across_, scratch_, row_sum_, rx);  // along x
         img = img * keep + (across_.transpose() * w).template cast<scalar>();
+        total += img.template cast<double>().sum();
       }
-      out /= out.sum();
+      // Mass blurred off the edges is dropped, the rest renormalised; in the same pass as the
+      // floor: out = (1 - lambda) out / total + lambda / N.
+      if (!(total > 0.0 && std::isfinite(total)))
+        detail::fail("robust_motion: the prediction's mass after the wide component is ", total,
+                     "; expected a positive finite sum (the base model's prediction held no "
+                     "finite mass)");
+      out = out * static_cast<scalar>((1.0 - lambda) / total) +
+            static_cast<scalar>(lambda / static_cast<double>(out.size()));
+      return report;
     }
     if (lambda > 0.0)
       out = out * static_cast<scalar>(1.0 - lambda) +
@@ -157,14 +163,16 @@ class robust_motion {
   // before the passes along x ran row by row, one run each).
   static constexpr Eigen::Index direct_radius = 3;
 
-  // Three box passes of radius rx along x, then three of radius ry along y, over `img`; returns
-  // the result, the interior of a plane of rows + 2 ry by cols + 2 rx floats whose margins stay
+  // Three box passes of radius rx along x, then three of radius ry along y, over `img`, the
+  // last one mixed into `img` itself: img = keep img + scale blur(img); returns img's new sum.
+  // The passes run in padded planes of rows + 2 ry by cols + 2 rx floats whose margins stay
   // zero ("zero outside" at every pass, as `box3_down`). Unnormalised: every pass sums 2 r + 1
-  // values. The passes along x run row by row in two padded row buffers (a row stays in the L1
-  // cache for its three passes); those along y add whole rows of taps. Each pass is contiguous
-  // runs of taps added in registers, never a strided access.
+  // values (`scale` undoes it). The passes along x run row by row in two padded row buffers (a
+  // row stays in the L1 cache for its three passes); those along y add whole rows of taps. Each
+  // pass is contiguous runs of taps added in registers, never a strided access.
   template <class Img>
-  const float* blur_direct(const Img& img, Eigen::Index rx, Eigen::Index ry) const {
+  double blur_direct_mix(Img& img, Eigen::Index rx, Eigen::Index ry, float keep,
+                         float scale) const {
     const Eigen::Index rows = img.rows(), cols = img.cols();
     const Eigen::Index stride = cols + 2 * rx, height = rows + 2 * ry;
     // The margins' place depends on the radii as well as the padded shape (20 columns with
@@ -183,27 +191,68 @@ class robust_motion {
     float* r1 = row_b_.data();
     for (Eigen::Index i = 0; i < rows; ++i) {
       for (Eigen::Index c = 0; c < cols; ++c) r0[rx + c] = static_cast<float>(img(i, c));
-      sum_taps(r0, 1, rx, r1 + rx, cols);
-      sum_taps(r1, 1, rx, r0 + rx, cols);
-      sum_taps(r0, 1, rx, a + (i + ry) * stride + rx, cols);
+      sum_taps(r0, 1, rx, cols, store_sink{r1 + rx});
+      sum_taps(r1, 1, rx, cols, store_sink{r0 + rx});
+      sum_taps(r0, 1, rx, cols, store_sink{a + (i + ry) * stride + rx});
     }
-    for (int pass = 0; pass < 3; ++pass) {
+    for (int pass = 0; pass < 2; ++pass) {
       for (Eigen::Index i = ry; i < ry + rows; ++i)
-        sum_taps(a + (i - ry) * stride + rx, stride, ry, b + i * stride + rx, cols);
+        sum_taps(a + (i - ry) * stride + rx, stride, ry, cols, store_sink{b + i * stride + rx});
       std::swap(a, b);
     }
     // (Strips of 32 columns, each strip's three passes in the L1 cache, measured slower: 21.3
     // against 19.7 us a predict on the paper's grid.)
-    return a;  // three swaps: padded_b_
+    double total = 0.0;
+    for (Eigen::Index i = 0; i < rows; ++i) {
+      mix_sink sink{img.data() + i * cols, keep, scale};
+      sum_taps(a + i * stride + rx, stride, ry, cols, sink);
+      total += sink.total();
+    }
+    return total;
   }
 
-  // out[c] = sum over k in [0, 2 r] of in[k step + c], c in [0, n): a register of outputs
-  // at a time, its taps added in registers (one load per tap, one store), the rest one at a
-  // time in the same order. (Tap after tap over the whole row cost a load and a store of the
-  // partial sums per tap: no faster than the sliding sums.)
-  static void sum_taps(const float* in, Eigen::Index step, Eigen::Index r, float* out,
-                       Eigen::Index n) {
-    using batch = xsimd::batch<float, detail::kernel_arch<float>>;
+  using float_batch = xsimd::batch<float, detail::kernel_arch<float>>;
+
+  // Where `sum_taps` puts its sums: stored as they are ...
+  struct store_sink {
+    float* out;
+    void operator()(const float_batch& s, Eigen::Index c) const { s.store_unaligned(out + c); }
+    void operator()(float s, Eigen::Index c) const { out[c] = s; }
+  };
+  // ... or mixed into the belief's row, o = keep o + scale s, and the row's new mass summed
+  // (a register of partial sums, then in double).
+  struct mix_sink {
+    float* out;
+    float keep, scale;
+    float_batch acc = float_batch(0.0F);
+    double rest = 0.0;
+    void operator()(const float_batch& s, Eigen::Index c) {
+      const float_batch o =
+          xsimd::fma(float_batch::load_unaligned(out + c), float_batch(keep), s * scale);
+      o.store_unaligned(out + c);
+      acc += o;
+    }
+    void operator()(float s, Eigen::Index c) {
+      out[c] = out[c] * keep + s * scale;
+      rest += static_cast<double>(out[c]);
+    }
+    [[nodiscard]] double total() const {
+      alignas(64) std::array<float, float_batch::size> lanes{};
+      acc.store_aligned(lanes.data());
+      double t = rest;
+      for (const float v : lanes) t += static_cast<double>(v);
+      return t;
+    }
+  };
+
+  // sink(sum over k in [0, 2 r] of in[k step + c], c) for c in [0, n): a register of sums at
+  // a time, its taps added in registers (one load per tap), the rest one at a time in the same
+  // order. (Tap after tap over the whole row cost a load and a store of the partial sums per
+  // tap: no faster than the sliding sums.)
+  template <class Sink>
+  static void sum_taps(const float* in, Eigen::Index step, Eigen::Index r, Eigen::Index n,
+                       Sink&& sink) {
+    using batch = float_batch;
     constexpr auto width = static_cast<Eigen::Index>(batch::size);
     const Eigen::Index taps = 2 * r + 1;
     Eigen::Index c = 0;
@@ -221,20 +270,20 @@ class robust_motion {
         s2 += batch::load_unaligned(t + 2 * width);
         s3 += batch::load_unaligned(t + 3 * width);
       }
-      s0.store_unaligned(out + c);
-      s1.store_unaligned(out + c + width);
-      s2.store_unaligned(out + c + 2 * width);
-      s3.store_unaligned(out + c + 3 * width);
+      sink(s0, c);
+      sink(s1, c + width);
+      sink(s2, c + 2 * width);
+      sink(s3, c + 3 * width);
     }
     for (; c + width <= n; c += width) {
       batch s = batch::load_unaligned(in + c);
       for (Eigen::Index k = 1; k < taps; ++k) s += batch::load_unaligned(in + k * step + c);
-      s.store_unaligned(out + c);
+      sink(s, c);
     }
     for (; c < n; ++c) {
       float s = in[c];
       for (Eigen::Index k = 1; k < taps; ++k) s += in[k * step + c];
-      out[c] = s;
+      sink(s, c);
     }
   }
 
