@@ -326,6 +326,13 @@ int main(int argc, char** argv) try {
                  "fault: the object slips by --slip mm before this touch (1-based; 0 = none)");
   app.add_option("--slip", faults.slip_mm, "fault: how far the object slips, mm (20)")
       ->check(CLI::Range(0.001, 100.0));
+  std::string oracle_name = "none";
+  app.add_option("--fault-oracle", oracle_name,
+                 "a ceiling, not a method: what the filter is told about the faults: none, "
+                 "transition (after every move the belief is mixed with its ring of "
+                 "--outlier-size, weight --outliers: the outliers' true motion model), told "
+                 "(after each outlier move the belief is replaced by its ring of --outlier-size, "
+                 "at the slip's touch by its ring of --slip: when and how far, not which way)");
   app.add_option("--kidnap-touch", faults.kidnap_touch,
                  "fault: the sensor is put down elsewhere at this touch, odometry as usual "
                  "(1-based; 0 = none)");
@@ -420,6 +427,11 @@ int main(int argc, char** argv) try {
   max_sequences = static_cast<std::size_t>(sequences);
   if (!native) tacmap_tools::check_map_px(map_px);
   if (odometry_noise >= 0.0) faults.odometry_sigma_mm = odometry_noise;
+  faults.oracle =
+      parse_choice<tacmap::fault_oracle>("--fault-oracle", oracle_name,
+                                         {{"none", tacmap::fault_oracle::none},
+                                          {"transition", tacmap::fault_oracle::transition},
+                                          {"told", tacmap::fault_oracle::told}});
   try {
     faults.validate();
   } catch (const std::invalid_argument& e) {

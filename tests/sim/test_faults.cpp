@@ -118,6 +118,18 @@ TEST_CASE("faults: out-of-range settings are refused with the value") {
   f.odometry_sigma_mm = -1.0;
   CHECK(message_of([&] { f.validate(); }).find("odometry_sigma_mm = -1") != std::string::npos);
   f = {};
+  f.oracle = tacmap::fault_oracle::told;
+  CHECK(message_of([&] { f.validate(); })
+            .find("the told oracle with outlier_probability = 0 and no slip; expected outliers "
+                  "or a slip") != std::string::npos);
+  f.slip_touch = 4;
+  CHECK_NOTHROW(f.validate());
+  f.oracle = tacmap::fault_oracle::transition;
+  CHECK(message_of([&] {
+          f.validate();
+        }).find("the transition oracle with outlier_probability = 0; expected outliers") !=
+        std::string::npos);
+  f = {};
   f.kidnap_touch = 40;
   tacmap::sim_rng rng(1);
   CHECK(message_of([&] {
@@ -153,6 +165,68 @@ TEST_CASE("experiment: odometry that carries the belief off the map restarts it,
   config.lost_probability = 0.001;
   tacmap::localization_experiment robust(gecko(), config);
   for (const auto& t : robust.run(0).touches) CHECK_FALSE(t.lost_track);
+}
+
+TEST_CASE("outlier oracle: the ring moves mass by the outlier's size in every direction") {
+  // A 120 px map at the paper's 1.13 mm per px: 103 x 79 positions, two appearance planes.
+  tacmap::image<float> map(120, 120);
+  for (Eigen::Index r = 0; r < map.rows(); ++r)
+    for (Eigen::Index c = 0; c < map.cols(); ++c)
+      map(r, c) = static_cast<float>((r * 7 + c * 13) % 17) / 17.0F;
+  auto filter = tacmap::make_planar_filter({}, map, 3.4 / 3.0, {.width = 18, .height = 42});
+  const auto& grid = filter.grid();
+  const Eigen::Index rows = grid.rows(), cols = grid.cols(), plane = rows * cols;
+  REQUIRE(filter.belief().size() == 2 * plane);
+  const Eigen::Index centre = (rows / 2) * cols + cols / 2;
+  const Eigen::Vector2d at = grid.state_mm(centre).head<2>();
+  for (const double share : {1.0, 0.25}) {
+    CAPTURE(share);
+    Eigen::ArrayXd prior = Eigen::ArrayXd::Zero(2 * plane);
+    prior(centre) = 0.75;          // appearance 0
+    prior(plane + centre) = 0.25;  // appearance 1: each plane on its own
+    filter.set_prior(prior);
+    tacmap::detail::spread_over_ring(filter, 8.0, share);
+    const auto& b = filter.belief();
+    CHECK(static_cast<double>(b.sum()) == doctest::Approx(1.0).epsilon(1e-5));
+    CHECK(static_cast<double>(b.head(plane).sum()) == doctest::Approx(0.75).epsilon(1e-5));
+    CHECK(static_cast<double>(b(centre)) == doctest::Approx(0.75 * (1.0 - share)).epsilon(1e-5));
+    // The moved mass: at 8 mm from where it was (bilinear splats: within a pitch), its mean
+    // where it was (the ring is symmetric).
+    double moved = 0, distance = 0, far = 0;
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (Eigen::Index i = 0; i < plane; ++i) {
+      if (i == centre) continue;
+      const double p = static_cast<double>(b(i));
+      const Eigen::Vector2d d = grid.state_mm(i).head<2>() - at;
+      moved += p;
+      distance += p * d.norm();
+      mean += p * d;
+      if (std::abs(d.norm() - 8.0) > 3.4 / 3.0 * 1.5) far += p;
+    }
+    CHECK(moved == doctest::Approx(0.75 * share).epsilon(1e-5));
+    CHECK(distance / moved == doctest::Approx(8.0).epsilon(0.03));
+    CHECK(mean.norm() / moved < 0.01);
+    CHECK(far == doctest::Approx(0.0));
+  }
+}
+
+TEST_CASE("outlier oracle: told which moves are outliers, the filter follows them better") {
+  // Every move off by 8 mm; the same sequences with and without being told which moves (all).
+  tacmap::localization_config config;
+  config.model = tacmap::measurement_kind::lite;
+  config.features = tacmap::window_features::shared_dense;
+  config.faults.outlier_probability = 1.0;
+  config.faults.outlier_mm = 8.0;
+  double error[2] = {0.0, 0.0};
+  for (const auto oracle : {tacmap::fault_oracle::none, tacmap::fault_oracle::told}) {
+    config.faults.oracle = oracle;
+    tacmap::localization_experiment experiment(gecko(), config);
+    for (std::size_t s = 0; s < 4; ++s)
+      for (const auto& t : experiment.run(s).touches)
+        error[oracle == tacmap::fault_oracle::told] += t.error_mm;
+  }
+  MESSAGE("summed error, not told / told: " << error[0] << " / " << error[1] << " mm");
+  CHECK(error[1] < 0.5 * error[0]);
 }
 
 }  // namespace test_faults

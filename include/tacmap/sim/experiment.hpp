@@ -28,6 +28,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <optional>
 #include <span>
@@ -84,6 +85,56 @@ struct localization_config : localizer_config {
     faults.validate();
   }
 };
+namespace detail {
+
+// The oracles of sim/faults.hpp's `fault_oracle`: the filter's belief becomes
+// (1 - share) b + share ring(b), where ring(b) moves every state's mass by `radius_mm` in every
+// direction equally (720 directions, each split over its four nearest states; mass carried off
+// the grid is dropped and the rest renormalised, as the motion models do). Each rows x cols
+// plane (appearance hypothesis, heading layer) on its own. In double; a few million operations
+// per move: for evaluations only.
+template <class Filter>
+void spread_over_ring(Filter& filter, double radius_mm, double share) {
+  const auto& grid = filter.grid();
+  const Eigen::Index rows = grid.rows(), cols = grid.cols(), plane = rows * cols;
+  const double pitch_x = cols > 1 ? std::abs(grid.state_mm(1)(0) - grid.state_mm(0)(0)) : 1.0;
+  const double pitch_y = rows > 1 ? std::abs(grid.state_mm(cols)(1) - grid.state_mm(0)(1)) : 1.0;
+  std::map<std::pair<Eigen::Index, Eigen::Index>, double> taps;  // (dy, dx) -> weight
+  constexpr int directions = 720;
+  for (int k = 0; k < directions; ++k) {
+    const double angle = 2.0 * std::numbers::pi * (k + 0.5) / directions;
+    const double fx = radius_mm * std::cos(angle) / pitch_x;
+    const double fy = radius_mm * std::sin(angle) / pitch_y;
+    const double x0 = std::floor(fx), y0 = std::floor(fy), ax = fx - x0, ay = fy - y0;
+    const auto ix = static_cast<Eigen::Index>(x0), iy = static_cast<Eigen::Index>(y0);
+    const double w = 1.0 / directions;
+    taps[{iy, ix}] += w * (1 - ax) * (1 - ay);
+    taps[{iy, ix + 1}] += w * ax * (1 - ay);
+    taps[{iy + 1, ix}] += w * (1 - ax) * ay;
+    taps[{iy + 1, ix + 1}] += w * ax * ay;
+  }
+  const auto& belief = filter.belief();
+  Eigen::ArrayXd mixed(belief.size());
+  image<double> in(rows, cols), ring(rows, cols);
+  for (Eigen::Index at = 0; at < belief.size(); at += plane) {
+    in = Eigen::Map<const image<typename Filter::scalar_type>>(belief.data() + at, rows, cols)
+             .template cast<double>();
+    ring.setZero();
+    for (const auto& [offset, w] : taps) {
+      const auto [dy, dx] = offset;
+      const Eigen::Index h = rows - std::abs(dy), wd = cols - std::abs(dx);
+      if (h <= 0 || wd <= 0) continue;
+      ring.block(std::max<Eigen::Index>(dy, 0), std::max<Eigen::Index>(dx, 0), h, wd) +=
+          w * in.block(std::max<Eigen::Index>(-dy, 0), std::max<Eigen::Index>(-dx, 0), h, wd);
+    }
+    Eigen::Map<image<double>>(mixed.data() + at, rows, cols) = (1.0 - share) * in + share * ring;
+  }
+  if (!(mixed.sum() > 0.0)) return;  // everything carried off: keep the filter's own belief
+  filter.set_prior(mixed);
+}
+
+}  // namespace detail
+
 /// What happened at one touch.
 struct touch_record {
   std::size_t step = 0;      ///< 0-based position in the sequence (touch number - 1)
@@ -377,6 +428,13 @@ class localization_experiment {
           // motion model trusts): start again from a uniform belief, as a user would.
           filter.reset();
           lost_track = true;
+        }
+        const exploration_faults& f = config_.faults;
+        if (!lost_track && f.oracle == fault_oracle::transition)
+          detail::spread_over_ring(filter, f.outlier_mm, f.outlier_probability);
+        if (!lost_track && f.oracle == fault_oracle::told) {
+          if (faulted.outlier[step] != 0) detail::spread_over_ring(filter, f.outlier_mm, 1.0);
+          if (step + 1 == f.slip_touch) detail::spread_over_ring(filter, f.slip_mm, 1.0);
         }
       }
       // Where the sensor really presses on the object: the true map pose carried by the

@@ -30,6 +30,21 @@
 
 namespace tacmap {
 
+/// What the filter is told about the faults: a ceiling for evaluations, not a method (a robot
+/// is never told). The experiment applies it after the filter's own prediction; "ring(b, d)"
+/// moves every state's mass by d mm in every direction equally.
+enum class fault_oracle {
+  none,  ///< nothing: the filter's own motion model alone
+  /// The outliers' true transition: after every move the belief b becomes
+  /// (1 - outlier_probability) b + outlier_probability ring(b, outlier_mm) — what the best
+  /// motion model for this fault does. Needs outliers.
+  transition,
+  /// When a fault happens and its size, not its direction: after each outlier move the belief
+  /// becomes ring(b, outlier_mm), at the slip's touch ring(b, slip_mm); after the other moves it
+  /// is left alone. Needs outliers or a slip.
+  told,
+};
+
 /// Faults injected into a sequence's exploration (see the file's comment). Defaults: none.
 struct exploration_faults {
   double outlier_probability = 0.0;  ///< per move, of an odometry outlier
@@ -39,6 +54,8 @@ struct exploration_faults {
   std::size_t slip_touch = 0;    ///< 1-based touch from which the object has slipped (0: none)
   double slip_mm = 20.0;         ///< how far it slipped, mm
   std::size_t kidnap_touch = 0;  ///< 1-based touch at which the sensor is put elsewhere (0: none)
+  /// What the filter is told about the outliers and the slip (evaluations' ceilings only).
+  fault_oracle oracle = fault_oracle::none;
 
   [[nodiscard]] bool any() const {
     return outlier_probability > 0.0 || odometry_sigma_mm.has_value() || slip_touch > 0 ||
@@ -63,6 +80,14 @@ struct exploration_faults {
       detail::fail(
           "exploration_faults: slip_touch = 1; expected 0 (no slip) or a touch >= 2 (the "
           "object slips between two touches)");
+    if (oracle == fault_oracle::transition && !(outlier_probability > 0.0))
+      detail::fail("exploration_faults: the transition oracle with outlier_probability = ",
+                   outlier_probability,
+                   "; expected outliers whose transition it applies (e.g. 0.1), or oracle none");
+    if (oracle == fault_oracle::told && !(outlier_probability > 0.0) && slip_touch == 0)
+      detail::fail(
+          "exploration_faults: the told oracle with outlier_probability = ", outlier_probability,
+          " and no slip", "; expected outliers or a slip to tell the filter about, or oracle none");
     if (kidnap_touch == 1)
       detail::fail(
           "exploration_faults: kidnap_touch = 1; expected 0 (no kidnap) or a touch >= 2 "
