@@ -59,7 +59,8 @@ struct robust_motion_params {
 };
 
 /// `M`'s prediction mixed with a uniform floor (see the file's comment). Models
-/// `motion_model<G>` for every grid `M` does.
+/// `motion_model<G>` for every grid `M` does. Keeps the wide component's workspaces between
+/// predictions, like the base models: one object is not reentrant (one filter per thread).
 template <class M>
 class robust_motion {
  public:
