@@ -79,6 +79,8 @@ TEST_CASE("faults: a slip and a kidnap move every later touch by one offset, on 
     tacmap::sim_rng a(q + 10), b(q + 10);
     const auto s = tacmap::apply_faults(gecko(), seq, positions, slip, a);
     const auto k = tacmap::apply_faults(gecko(), seq, positions, kidnap, b);
+    CHECK(s.slipped);
+    CHECK_FALSE(k.slipped);
     for (std::size_t t = 0; t < seq.size(); ++t) {
       const auto& loc = gecko().locations[seq[t].location];
       CHECK(s.reported[t].dx_mm == seq[t].measured_motion.dx_mm);  // odometry does not see it
@@ -208,6 +210,57 @@ TEST_CASE("outlier oracle: the ring moves mass by the outlier's size in every di
     CHECK(mean.norm() / moved < 0.01);
     CHECK(far == doctest::Approx(0.0));
   }
+}
+
+TEST_CASE("faults: a slip no direction keeps on the map is dropped, and says so") {
+  // 100 mm on the 136 x 136 mm gecko (positions span about 116 x 89 mm): a sequence whose later
+  // touches lie apart cannot slip that far.
+  const auto positions = gecko_positions();
+  tacmap::exploration_faults slip;
+  slip.slip_touch = 2;
+  slip.slip_mm = 100.0;
+  int dropped = 0;
+  for (std::size_t q = 0; q < gecko().sequences.size(); ++q) {
+    const auto& seq = gecko().sequences[q];
+    tacmap::sim_rng rng(q + 10);
+    const auto s = tacmap::apply_faults(gecko(), seq, positions, slip, rng);
+    const auto& loc = gecko().locations[seq[1].location];
+    const double moved = std::hypot(s.truth[1].x_mm - loc.x_mm, s.truth[1].y_mm - loc.y_mm);
+    CHECK(moved == doctest::Approx(s.slipped ? 100.0 : 0.0));
+    dropped += s.slipped ? 0 : 1;
+  }
+  CHECK(dropped > 0);
+}
+
+TEST_CASE("outlier oracle: told which moves are outliers, only those moves change") {
+  // A third of the moves off by 8 mm: the told filter's touches are those of the filter not
+  // told, bit for bit, up to the first outlier; that touch differs (the belief was spread).
+  tacmap::localization_config config;
+  config.model = tacmap::measurement_kind::lite;
+  config.features = tacmap::window_features::shared_dense;
+  config.faults.outlier_probability = 0.3;
+  config.faults.outlier_mm = 8.0;
+  tacmap::localization_experiment plain(gecko(), config);
+  config.faults.oracle = tacmap::fault_oracle::told;
+  tacmap::localization_experiment told(gecko(), config);
+  int compared = 0;
+  for (std::size_t s = 0; s < gecko().sequences.size(); ++s) {
+    const auto a = plain.run(s).touches, b = told.run(s).touches;
+    REQUIRE(a.size() == b.size());
+    for (std::size_t t = 0; t < a.size(); ++t) {
+      CAPTURE(s);
+      CAPTURE(t);
+      REQUIRE(a[t].odometry_outlier == b[t].odometry_outlier);
+      if (a[t].odometry_outlier) {
+        CHECK(a[t].entropy_nats != b[t].entropy_nats);
+        ++compared;
+        break;
+      }
+      CHECK(a[t].entropy_nats == b[t].entropy_nats);
+      CHECK(a[t].error_mm == b[t].error_mm);
+    }
+  }
+  CHECK(compared > 5);
 }
 
 TEST_CASE("outlier oracle: told which moves are outliers, the filter follows them better") {

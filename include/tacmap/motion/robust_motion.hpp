@@ -104,8 +104,9 @@ class robust_motion {
       const auto keep = static_cast<scalar>(1.0 - w);
       // Float beliefs: direct sums for small radii; double beliefs keep the double sums.
       const bool direct = std::is_same_v<scalar, float> && std::max(rx, ry) <= direct_radius;
-      // The planes' mass after mixing, summed while they are written: the normalisation below
-      // needs no pass of its own.
+      // The planes' mass after mixing: summed while they are written by the direct blur (the
+      // normalisation below needs no pass of its own), in a pass of its own after the sliding
+      // sums.
       double total = 0.0;
       for (Eigen::Index at = 0; at < out.size(); at += plane) {
         Eigen::Map<image<scalar>> img(out.data() + at, rows, cols);
@@ -130,9 +131,10 @@ class robust_motion {
       // Mass blurred off the edges is dropped, the rest renormalised; in the same pass as the
       // floor: out = (1 - lambda) out / total + lambda / N.
       if (!(total > 0.0 && std::isfinite(total)))
-        detail::fail("robust_motion: the prediction's mass after the wide component is ", total,
-                     "; expected a positive finite sum (the base model's prediction held no "
-                     "finite mass)");
+        detail::fail<std::logic_error>(
+            "robust_motion: the prediction's mass after the wide component is ", total,
+            "; expected a positive finite sum (the base model's prediction held no "
+            "finite mass)");
       out = out * static_cast<scalar>((1.0 - lambda) / total) +
             static_cast<scalar>(lambda / static_cast<double>(out.size()));
       return report;

@@ -31,17 +31,21 @@
 namespace tacmap {
 
 /// What the filter is told about the faults: a ceiling for evaluations, not a method (a robot
-/// is never told). The experiment applies it after the filter's own prediction; "ring(b, d)"
-/// moves every state's mass by d mm in every direction equally.
+/// is never told). The experiment applies it after the filter's own prediction, on top of the
+/// filter's motion model (its floor and wide component included: turn them off in the
+/// configuration to measure the oracle alone); "ring(b, d)" moves every state's mass by d mm in
+/// every direction equally.
 enum class fault_oracle {
   none,  ///< nothing: the filter's own motion model alone
   /// The outliers' true transition: after every move the belief b becomes
-  /// (1 - outlier_probability) b + outlier_probability ring(b, outlier_mm) — what the best
-  /// motion model for this fault does. Needs outliers.
+  /// (1 - outlier_probability) b + outlier_probability ring(b, outlier_mm) — with a base model
+  /// of the true noise and no wide component, what the best motion model for this fault does.
+  /// Needs outliers.
   transition,
   /// When a fault happens and its size, not its direction: after each outlier move the belief
-  /// becomes ring(b, outlier_mm), at the slip's touch ring(b, slip_mm); after the other moves it
-  /// is left alone. Needs outliers or a slip.
+  /// becomes ring(b, outlier_mm), at the slip's touch (when the slip happened)
+  /// ring(b, slip_mm); after the other moves only the filter's own prediction applies. Needs
+  /// outliers or a slip.
   told,
 };
 
@@ -101,6 +105,11 @@ struct faulted_sequence {
   std::vector<touch_location> truth;  ///< per touch, map frame
   std::vector<odometry> reported;     ///< per touch (element 0 unused)
   std::vector<char> outlier;          ///< per touch: its reported move is an outlier
+  /// The slip happened: false without one, and when no direction (200 draws) kept the later
+  /// touches on the map — then the sequence runs without it, and evaluations must not count it
+  /// as a slip (`touch_record::moved_unseen` is not set).
+  bool slipped = false;
+  bool kidnapped = false;  ///< the kidnap happened (as `slipped`)
 };
 
 /// Applies `faults` to `sequence` of `protocol`, drawing from `rng`; truths stay within the
@@ -155,6 +164,7 @@ struct faulted_sequence {
       const double ox = faults.slip_mm * std::cos(angle), oy = faults.slip_mm * std::sin(angle);
       if (on_map(from, ox, oy)) {
         shift_from(from, ox, oy);
+        out.slipped = true;
         break;
       }
     }
@@ -167,6 +177,7 @@ struct faulted_sequence {
       const double ox = target(0) - out.truth[from].x_mm, oy = target(1) - out.truth[from].y_mm;
       if (on_map(from, ox, oy)) {
         shift_from(from, ox, oy);
+        out.kidnapped = true;
         break;
       }
     }
