@@ -17,6 +17,9 @@ namespace {
 
 const choices<relief_kind> relief_names = {{"binary", relief_kind::binary},
                                            {"continuous", relief_kind::continuous}};
+const choices<fault_oracle> oracle_names = {{"none", fault_oracle::none},
+                                            {"transition", fault_oracle::transition},
+                                            {"told", fault_oracle::told}};
 const choices<relief_polarity> polarity_names = {{"bright", relief_polarity::bright_raised},
                                                  {"dark", relief_polarity::dark_raised},
                                                  {"random", relief_polarity::random}};
@@ -324,10 +327,17 @@ void bind_simulation(py::module_& m) {
       .def_readwrite("kidnap_touch", &exploration_faults::kidnap_touch,
                      "1-based touch at which the sensor is put elsewhere (0: none).")
       .def("any", &exploration_faults::any);
+  enum_property(faults, "oracle", &exploration_faults::oracle, oracle_names,
+                "Evaluations' ceilings, not a method: what the filter is told about the faults. "
+                "'none'; 'transition' (after every move the belief is mixed with its ring of "
+                "outlier_mm, weight outlier_probability: the outliers' true motion model); "
+                "'told' (after each outlier move, and at the slip's touch when it happened, the "
+                "belief is replaced by its ring of the fault's size). On top of the filter's own "
+                "floor and wide component.");
   keyword_struct<exploration_faults>(
       faults,
       {"outlier_probability", "outlier_mm", "odometry_sigma_mm", "slip_touch", "slip_mm",
-       "kidnap_touch"},
+       "kidnap_touch", "oracle"},
       "Faults during exploration (C++ tacmap::exploration_faults): odometry outliers and "
       "noise, a slip, a kidnap. None by default.");
 
@@ -486,7 +496,9 @@ void bind_simulation(py::module_& m) {
       .def_readonly("odometry_outlier", &touch_record::odometry_outlier,
                     "The move before this touch was an injected outlier.")
       .def_readonly("moved_unseen", &touch_record::moved_unseen,
-                    "The object slipped, or the sensor was kidnapped, just before this touch.")
+                    "The object slipped, or the sensor was kidnapped, just before this touch "
+                    "(not set when no direction kept the later touches on the map and the "
+                    "sequence ran without it).")
       .def_readonly("lost_track", &touch_record::lost_track,
                     "The motion before this touch carried the whole belief off the map and the "
                     "run restarted from a uniform belief.")

@@ -365,6 +365,10 @@ class TestBadInput(unittest.TestCase):
             tacmap.SimulatorParams(noise_counts=-1.0)
         with self.assertRaisesRegex(ValueError, "ScenarioParams.polarity = 'grey'"):
             tacmap.ScenarioParams(polarity="grey")
+        with self.assertRaisesRegex(ValueError, "ExplorationFaults.oracle = 'always'"):
+            tacmap.ExplorationFaults(oracle="always")
+        told = tacmap.ExplorationFaults(outlier_probability=0.1, oracle="told")
+        self.assertEqual(told.oracle, "told")
         experiment = tacmap.Experiment(gecko(), fast_config())
         with self.assertRaisesRegex(ValueError, "sequence 99 does not exist"):
             experiment.run(99)
