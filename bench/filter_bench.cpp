@@ -94,6 +94,17 @@ void predict_wide(benchmark::State& state) {
 }
 BENCHMARK(predict_wide);
 
+// ... and the broad component (b = 0.05 of 10 mm, the localizer's default): on blocks of 4 x 4
+// states, interpolated back.
+void predict_broad(benchmark::State& state) {
+  predict_robust_with(state, {.lost_probability = 0.001,
+                              .wide_probability = 0.1,
+                              .wide_sigma_mm = 3.0,
+                              .broad_probability = 0.05,
+                              .broad_sigma_mm = 10.0});
+}
+BENCHMARK(predict_broad);
+
 // The wide component's spread, in mm (argument): radius 2, 3, 4, 5, 7 and 10 px of the paper's
 // 1.13 mm grid. Small radii sum the taps directly, larger ones use sliding sums
 // (robust_motion's `direct_radius`): this row is where the two were compared.

@@ -244,10 +244,18 @@ void bind_config(py::module_& m) {
                      "(LocalizerConfig.default_wide_probability); 0: none.")
       .def_readwrite("wide_sigma_mm", &localizer_config::wide_sigma_mm,
                      "The wide motion component's spread, mm.")
+      .def_readwrite("broad_probability", &localizer_config::broad_probability,
+                     "The probability that a move is off by centimetres (the object slipped in "
+                     "the grasp): a broad Gaussian of broad_sigma_mm. None: the C++ default "
+                     "(LocalizerConfig.default_broad_probability, 0); 0: none.")
+      .def_readwrite("broad_sigma_mm", &localizer_config::broad_sigma_mm,
+                     "The broad motion component's spread, mm.")
       .def_readonly_static("default_appearance_switch",
                            &localizer_config::default_appearance_switch)
       .def_readonly_static("default_lost_probability", &localizer_config::default_lost_probability)
       .def_readonly_static("default_wide_probability", &localizer_config::default_wide_probability)
+      .def_readonly_static("default_broad_probability",
+                           &localizer_config::default_broad_probability)
       .def_static("paper", &localizer_config::paper,
                   "The paper's configuration (Sec. III-C, IV): SIFT-lite, all pairs (eq. (1)), "
                   "the inverse likelihood (eq. (2)), per-window features, a fixed appearance "
@@ -259,7 +267,8 @@ void bind_config(py::module_& m) {
       cfg,
       {"model", "pairs", "shape", "features", "tau", "tempering", "motion_sigma_mm", "motion_k",
        "preprocessing", "confidence", "headings", "turn_sigma_rad", "appearance",
-       "appearance_switch", "lost_probability", "wide_probability", "wide_sigma_mm"},
+       "appearance_switch", "lost_probability", "wide_probability", "wide_sigma_mm",
+       "broad_probability", "broad_sigma_mm"},
       "Everything that configures the filter a Localizer (or a simulated experiment) runs (C++ "
       "tacmap::localizer_config): the measurement model, the motion model, the latent "
       "appearance, preprocessing and the verdict. The defaults are the best measured (README, "

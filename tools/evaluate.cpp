@@ -358,6 +358,15 @@ int main(int argc, char** argv) try {
       ->check(CLI::Range(0.0, 0.999));
   app.add_option("--wide-sigma", wide_sigma, "the wide component's spread, mm per axis (3)")
       ->check(CLI::Range(0.01, 100.0));
+  std::vector<double> broad_probabilities;
+  double broad_sigma = tacmap::localizer_config{}.broad_sigma_mm;
+  app.add_option("--broad-probability", broad_probabilities,
+                 "probability that a move is off by centimetres (a slip): a broad component of "
+                 "--broad-sigma (robust_motion; comma-separated to compare; default 0)")
+      ->delimiter(',')
+      ->check(CLI::Range(0.0, 0.999));
+  app.add_option("--broad-sigma", broad_sigma, "the broad component's spread, mm per axis (10)")
+      ->check(CLI::Range(0.01, 1000.0));
   app.add_option("--touches", photo_touches,
                  "touches per sequence of the photographs' protocols (7; the gecko's are fixed)")
       ->check(CLI::Range(1, 200));
@@ -577,6 +586,9 @@ int main(int argc, char** argv) try {
   for (auto& c : configs) c.wide_sigma_mm = wide_sigma;
   expand(wide_probabilities,
          [](tacmap::localization_config& c, double v) { c.wide_probability = v; });
+  for (auto& c : configs) c.broad_sigma_mm = broad_sigma;
+  expand(broad_probabilities,
+         [](tacmap::localization_config& c, double v) { c.broad_probability = v; });
 
   // One copy of every configuration per --headings value (NCC only with known orientation).
   {

@@ -42,6 +42,18 @@ std::vector<double> three_box_blur(std::vector<double> plane, Eigen::Index rows,
   return plane;
 }
 
+// The base model that does not move anything (the blurs alone are under test), for grid `G`
+// and its control type.
+template <class G, class Control = tacmap::odometry>
+struct identity_motion {
+  using control_type = Control;
+  tacmap::prediction_report predict(const G&, const tacmap::belief_array<G>& a,
+                                    tacmap::belief_array<G>& b, const control_type&) const {
+    b = a;
+    return {};
+  }
+};
+
 }  // namespace
 
 TEST_CASE("robust_motion: (1 - lambda) base + lambda / N, and lambda = 0 is the base model") {
@@ -140,15 +152,7 @@ void check_wide_blur(double sigma_mm, Eigen::Index r, double tolerance, double l
             (i / cols == rows - 1 ? T(20) : T(0));
   in /= in.sum();
   // No motion noise to speak of: base = identity.
-  struct identity {
-    using control_type = tacmap::odometry;
-    tacmap::prediction_report predict(const grid_type&, const tacmap::belief_array<grid_type>& a,
-                                      tacmap::belief_array<grid_type>& b,
-                                      const control_type&) const {
-      b = a;
-      return {};
-    }
-  };
+  using identity = identity_motion<grid_type>;
   const double w = 0.3;
   const tacmap::robust_motion<identity> wide(
       {}, {.lost_probability = lambda, .wide_probability = w, .wide_sigma_mm = sigma_mm});
@@ -200,15 +204,7 @@ TEST_CASE("robust_motion: one model on two grids whose padded planes have the sa
   const grid_type first({.width = 22, .height = 22}, 1.0, {.width = 3, .height = 3});
   const grid_type second({.width = 20, .height = 20}, 0.5, {.width = 3, .height = 3});
   REQUIRE(first.cols() + 2 == second.cols() + 4);
-  struct identity {
-    using control_type = tacmap::odometry;
-    tacmap::prediction_report predict(const grid_type&, const tacmap::belief_array<grid_type>& a,
-                                      tacmap::belief_array<grid_type>& b,
-                                      const control_type&) const {
-      b = a;
-      return {};
-    }
-  };
+  using identity = identity_motion<grid_type>;
   const double w = 0.5;
   const tacmap::robust_motion<identity> wide({}, {.wide_probability = w, .wide_sigma_mm = 1.0});
   tacmap::belief_array<grid_type> in_first = tacmap::belief_array<grid_type>::Constant(
@@ -256,15 +252,7 @@ TEST_CASE("robust_motion: on a latent pose grid the wide component blurs every h
   for (Eigen::Index i = 0; i < in.size(); ++i)
     in(i) = 0.5F + static_cast<float>((i * 53) % 17) + (i < plane ? 40.0F : 0.0F);
   in /= in.sum();
-  struct identity {
-    using control_type = tacmap::sensor_odometry;
-    tacmap::prediction_report predict(const grid_type&, const tacmap::belief_array<grid_type>& a,
-                                      tacmap::belief_array<grid_type>& b,
-                                      const control_type&) const {
-      b = a;
-      return {};
-    }
-  };
+  using identity = identity_motion<grid_type, tacmap::sensor_odometry>;
   const double w = 0.25;
   const tacmap::robust_motion<identity> wide({}, {.wide_probability = w, .wide_sigma_mm = 2.0});
   tacmap::belief_array<grid_type> got(grid.size());
@@ -291,6 +279,88 @@ TEST_CASE("robust_motion: on a latent pose grid the wide component blurs every h
   // the blur carried off the plane's edges.
   CHECK(static_cast<double>(got.head(plane).sum()) ==
         doctest::Approx(static_cast<double>(in.head(plane).sum())).epsilon(0.05));
+}
+
+// The broad component on a 120 x 120 grid of 1 mm per state, around a point mass: b of the mass
+// spread by about sigma per axis, the mean where it was (the blocks' split is the transpose of
+// the interpolation back), the rest where it was.
+template <class T>
+void check_broad(double at_x, double at_y) {
+  CAPTURE(at_x);
+  CAPTURE(at_y);
+  using grid_type = tacmap::planar_grid<T>;
+  const grid_type grid({.width = 122, .height = 122}, 1.0, {.width = 3, .height = 3});
+  using identity = identity_motion<grid_type>;
+  const auto centre =
+      static_cast<Eigen::Index>(at_y) * grid.cols() + static_cast<Eigen::Index>(at_x);
+  tacmap::belief_array<grid_type> in = tacmap::belief_array<grid_type>::Zero(grid.size());
+  in(centre) = T(1);
+  const double b = 0.5, sigma = 10.0;
+  const tacmap::robust_motion<identity> broad({},
+                                              {.broad_probability = b, .broad_sigma_mm = sigma});
+  tacmap::belief_array<grid_type> got(grid.size());
+  broad.predict(grid, in, got, {});
+  CHECK(static_cast<double>(got.sum()) == doctest::Approx(1.0).epsilon(1e-6));
+  CHECK((got >= T(0)).all());
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero(), second = Eigen::Vector2d::Zero();
+  for (Eigen::Index i = 0; i < got.size(); ++i) {
+    const Eigen::Vector2d d =
+        grid.state_mm(i).template head<2>() - grid.state_mm(centre).template head<2>();
+    mean += static_cast<double>(got(i)) * d;
+    second += static_cast<double>(got(i)) * d.cwiseProduct(d);
+  }
+  CHECK(std::abs(mean(0)) < 0.01);
+  CHECK(std::abs(mean(1)) < 0.01);
+  // b sigma^2, within what the split between block centres changes with the place (f^2 / 6 at
+  // most, f = 5 here: 4 %).
+  CHECK(second(0) == doctest::Approx(b * sigma * sigma).epsilon(0.05));
+  CHECK(second(1) == doctest::Approx(b * sigma * sigma).epsilon(0.05));
+  // The point keeps 1 - b, plus the broad density's peak (b / (2 pi sigma^2) or so).
+  CHECK(static_cast<double>(got(centre)) ==
+        doctest::Approx(1.0 - b + b / (2.0 * 3.14159265 * sigma * sigma)).epsilon(0.01));
+}
+
+TEST_CASE("robust_motion: the broad component spreads its share by sigma, the mean kept") {
+  check_broad<float>(60, 60);  // between two block centres (57 and 62)
+  check_broad<float>(62, 47);  // on a centre along x, between two along y
+  check_broad<double>(58, 71);
+}
+
+TEST_CASE("robust_motion: the broad component follows the position marginal, per plane mass") {
+  // Two appearance planes: 0.7 of the mass at one place in plane a, 0.3 at another in plane b.
+  // Each plane's broad part has the marginal's shape and its own share of the mass: a slip
+  // moves the object, not the appearance.
+  using grid_type = tacmap::latent_grid<tacmap::planar_grid<float>>;
+  const grid_type grid(
+      tacmap::planar_grid<float>({.width = 102, .height = 102}, 1.0, {.width = 3, .height = 3}),
+      {"a", "b"});
+  const Eigen::Index plane = grid.rows() * grid.cols();
+  using identity = identity_motion<grid_type>;
+  const Eigen::Index p = 40 * grid.cols() + 40, q = 60 * grid.cols() + 55;
+  tacmap::belief_array<grid_type> in = tacmap::belief_array<grid_type>::Zero(grid.size());
+  in(p) = 0.7F;
+  in(plane + q) = 0.3F;
+  const double b = 0.2;
+  const tacmap::robust_motion<identity> broad({}, {.broad_probability = b, .broad_sigma_mm = 8.0});
+  tacmap::belief_array<grid_type> got(grid.size());
+  broad.predict(grid, in, got, {});
+  CHECK(static_cast<double>(got.head(plane).sum()) == doctest::Approx(0.7).epsilon(1e-4));
+  CHECK(static_cast<double>(got.tail(plane).sum()) == doctest::Approx(0.3).epsilon(1e-4));
+  // Away from both points the two planes' values stand as their masses, 0.7 : 0.3.
+  for (const Eigen::Index at : {p + 3, q - 2 * grid.cols(), Eigen::Index{50 * 100 + 47}}) {
+    CAPTURE(at);
+    CHECK(static_cast<double>(got(plane + at)) / static_cast<double>(got(at)) ==
+          doctest::Approx(0.3 / 0.7).epsilon(1e-3));
+  }
+  // Plane b has mass near plane a's point, where it had none.
+  CHECK(got(plane + p) > 1e-4F);
+  CHECK(message_of([&] {
+          tacmap::robust_motion<identity>({}, {.wide_probability = 0.5, .broad_probability = 0.6});
+        }).find("broad_probability = 0.6 (with wide_probability 0.5 and lost_probability 0)") !=
+        std::string::npos);
+  CHECK(message_of([&] {
+          tacmap::robust_motion<identity>({}, {.broad_probability = 0.1, .broad_sigma_mm = 0.0});
+        }).find("broad_sigma_mm = 0; expected a spread in (0, 1000] mm") != std::string::npos);
 }
 
 }  // namespace test_robust_motion

@@ -369,6 +369,8 @@ class TestBadInput(unittest.TestCase):
             tacmap.ExplorationFaults(oracle="always")
         told = tacmap.ExplorationFaults(outlier_probability=0.1, oracle="told")
         self.assertEqual(told.oracle, "told")
+        with self.assertRaisesRegex(ValueError, "broad_probability = 0.95"):
+            tacmap.LocalizerConfig(broad_probability=0.95).validate()
         experiment = tacmap.Experiment(gecko(), fast_config())
         with self.assertRaisesRegex(ValueError, "sequence 99 does not exist"):
             experiment.run(99)
@@ -630,7 +632,7 @@ class TestDocumentation(unittest.TestCase):
         cfg = tacmap.LocalizerConfig.paper()
         # The paper's floats are named: 7-bit storage is the descriptor model's default.
         self.assertEqual(cfg.name(),
-                         "sift_lite/all_pairs/inverse/per_window/float32/lost=0/wide=0x3mm")
+                         "sift_lite/all_pairs/inverse/per_window/float32/lost=0/wide=0x3mm/broad=0x10mm")
         self.assertIn("model='sift_lite'", repr(cfg))
         cfg.preprocessing.min_peak = 123.0  # nested parameters are attributes of the config
         self.assertEqual(cfg.preprocessing.min_peak, 123.0)

@@ -14,6 +14,14 @@
 // the paper's model exactly. A move the base model cannot apply because it carries every state off
 // the map (it throws std::domain_error) leaves, with a floor, a uniform belief: the sensor is
 // somewhere on the map, and the touches will say where.
+//
+// Between the two, optional components for moves wrong by millimetres or centimetres:
+//     bel_bar = (1 - lambda) [(1 - w - b) P + w G_wide P + b G_broad P] / Z + lambda / N
+// with P = base.predict(bel), G a Gaussian blur of each plane (wide: an odometry outlier or
+// noise larger than configured, a few mm; broad: the object slipped in the grasp, about a
+// centimetre) and Z what remains on the grid. The broad component is computed on blocks of
+// about sigma / 2 states and interpolated back, pooled over the planes (a slip moves the
+// object, not its appearance or the heading).
 #pragma once
 
 #include <algorithm>
@@ -42,6 +50,11 @@ struct robust_motion_params {
   /// outliers, noise larger than configured). 0: none.
   double wide_probability = 0.0;
   double wide_sigma_mm = 4.0;  ///< the wide component's spread, mm per axis
+  /// b: the probability that a move is off by centimetres — the object slipped in the grasp,
+  /// the sensor was put down elsewhere nearby — a broad component of `broad_sigma_mm` per axis
+  /// around the base prediction. 0: none. Computed on a coarser lattice (see `predict`).
+  double broad_probability = 0.0;
+  double broad_sigma_mm = 10.0;  ///< the broad component's spread, mm per axis
 
   void validate() const {
     if (!(std::isfinite(lost_probability) && lost_probability >= 0.0 && lost_probability < 1.0))
@@ -55,6 +68,15 @@ struct robust_motion_params {
     if (!(std::isfinite(wide_sigma_mm) && wide_sigma_mm > 0.0 && wide_sigma_mm <= 100.0))
       detail::fail("robust_motion_params: wide_sigma_mm = ", wide_sigma_mm,
                    "; expected a spread in (0, 100] mm (e.g. 4)");
+    if (!(std::isfinite(broad_probability) && broad_probability >= 0.0 &&
+          broad_probability + wide_probability + lost_probability < 1.0))
+      detail::fail("robust_motion_params: broad_probability = ", broad_probability,
+                   " (with wide_probability ", wide_probability, " and lost_probability ",
+                   lost_probability,
+                   "); expected >= 0 with the three summing to less than 1 (e.g. 0.05)");
+    if (!(std::isfinite(broad_sigma_mm) && broad_sigma_mm > 0.0 && broad_sigma_mm <= 1000.0))
+      detail::fail("robust_motion_params: broad_sigma_mm = ", broad_sigma_mm,
+                   "; expected a spread in (0, 1000] mm (e.g. 10)");
   }
 };
 
@@ -89,44 +111,59 @@ class robust_motion {
       return {.mass_lost = 1.0};
     }
     using scalar = typename G::scalar_type;
-    const double w = params_.wide_probability;
-    if (w > 0.0) {
-      // out = (1 - w) out + w blur(out), the blur a Gaussian of wide_sigma_mm made of three
-      // box passes per axis (variance r (r + 1) px^2 for radius r) over every rows x cols
-      // plane; mass blurred off a plane's edge is dropped (zero outside, at every pass) and the
-      // rest renormalised, as the base model does with mass moved off the grid.
+    const double w = params_.wide_probability, wb = params_.broad_probability;
+    if (w > 0.0 || wb > 0.0) {
+      // out = (1 - w - b) out + w blur(out) + b broad(out), the blur a Gaussian of
+      // wide_sigma_mm made of three box passes per axis (variance r (r + 1) px^2 for radius r)
+      // over every rows x cols plane, `broad` one of broad_sigma_mm on blocks (`broad_density`);
+      // mass blurred off a plane's edge is dropped (zero outside, at every pass) and the rest
+      // renormalised, as the base model does with mass moved off the grid.
       const Eigen::Index rows = grid.rows(), cols = grid.cols(), plane = rows * cols;
       const double pitch_x = cols > 1 ? std::abs(grid.state_mm(1)(0) - grid.state_mm(0)(0)) : 1.0;
       const double pitch_y =
           rows > 1 ? std::abs(grid.state_mm(cols)(1) - grid.state_mm(0)(1)) : 1.0;
       const Eigen::Index rx = box_radius(params_.wide_sigma_mm / pitch_x);
       const Eigen::Index ry = box_radius(params_.wide_sigma_mm / pitch_y);
-      const auto keep = static_cast<scalar>(1.0 - w);
+      const auto keep = static_cast<scalar>(1.0 - w - wb);
+      // The broad component's density, from the base prediction before the planes are mixed.
+      if (wb > 0.0)
+        broad_density(out, rows, cols, params_.broad_sigma_mm / pitch_x,
+                      params_.broad_sigma_mm / pitch_y);
       // Float beliefs: direct sums for small radii; double beliefs keep the double sums.
       const bool direct = std::is_same_v<scalar, float> && std::max(rx, ry) <= direct_radius;
       // The planes' mass after mixing: summed while they are written by the direct blur (the
       // normalisation below needs no pass of its own), in a pass of its own after the sliding
       // sums.
       double total = 0.0;
-      for (Eigen::Index at = 0; at < out.size(); at += plane) {
+      for (Eigen::Index at = 0, layer = 0; at < out.size(); at += plane, ++layer) {
         Eigen::Map<image<scalar>> img(out.data() + at, rows, cols);
-        if constexpr (std::is_same_v<scalar, float>) {
-          if (direct) {
+        if (w <= 0.0) {
+          img *= keep;
+          total += img.template cast<double>().sum();
+        } else if (direct) {
+          if constexpr (std::is_same_v<scalar, float>) {
             // The passes summed 2 r + 1 values each without dividing: (2 rx + 1)^3 (2 ry + 1)^3.
             const double norm = std::pow(static_cast<double>(2 * rx + 1), -3.0) *
                                 std::pow(static_cast<double>(2 * ry + 1), -3.0);
             total += blur_direct_mix(img, rx, ry, keep, static_cast<float>(w * norm));
-            continue;
           }
+        } else {
+          // Wide radii: sliding sums in double, whole rows at a time (vectorised); the plane is
+          // transposed once so both axes run that way.
+          down_ = img.template cast<double>();
+          box3_down(down_, scratch_, row_sum_, ry);  // along y
+          across_ = down_.transpose();
+          box3_down(across_, scratch_, row_sum_, rx);  // along x
+          img = img * keep + (across_.transpose() * w).template cast<scalar>();
+          total += img.template cast<double>().sum();
         }
-        // Wide radii: sliding sums in double, whole rows at a time (vectorised); the plane is
-        // transposed once so both axes run that way.
-        down_ = img.template cast<double>();
-        box3_down(down_, scratch_, row_sum_, ry);  // along y
-        across_ = down_.transpose();
-        box3_down(across_, scratch_, row_sum_, rx);  // along x
-        img = img * keep + (across_.transpose() * w).template cast<scalar>();
-        total += img.template cast<double>().sum();
+        if (wb > 0.0) {
+          // This plane's part of the broad component: its share of the mass, spread like the
+          // position marginal (a slip moves the object, not its appearance or the heading).
+          const double share = wb * broad_mass_[static_cast<std::size_t>(layer)] / broad_total_;
+          img += (broad_ * share).template cast<scalar>();
+          total += share * broad_sum_;
+        }
       }
       // Mass blurred off the edges is dropped, the rest renormalised; in the same pass as the
       // floor: out = (1 - lambda) out / total + lambda / N.
@@ -155,6 +192,126 @@ class robust_motion {
     return std::max<Eigen::Index>(
         1, static_cast<Eigen::Index>(
                std::lround(0.5 * (std::sqrt(1.0 + 4.0 * sigma_px * sigma_px) - 1.0))));
+  }
+
+  // The broad component's density over one plane (`broad_`, rows x cols), from the position
+  // marginal of `b` (its planes summed; `broad_mass_` each plane's mass, `broad_total_` their
+  // sum): summed into blocks of fy x fx states (f = sigma / 2 states, rounded down: the blocks
+  // still resolve the spread), blurred there by a Gaussian of what the blocks and the
+  // interpolation back do not already spread (their variances (f^2 - 1) / 12 and f^2 / 6
+  // states^2: the three add up to sigma^2), zero outside, and interpolated back bilinearly
+  // (clamped at the edges). `broad_sum_`: the mass kept on the grid. A spread of 10 mm costs
+  // about what a plane's copy does: the blocks are few.
+  template <class Belief>
+  void broad_density(const Belief& b, Eigen::Index rows, Eigen::Index cols, double sx,
+                     double sy) const {
+    using scalar = typename Belief::Scalar;
+    const Eigen::Index plane = rows * cols, layers = b.size() / plane;
+    broad_mass_.assign(static_cast<std::size_t>(layers), 0.0);
+    broad_total_ = 0.0;
+    for (Eigen::Index layer = 0; layer < layers; ++layer) {
+      const double m =
+          Eigen::Map<const Eigen::Array<scalar, Eigen::Dynamic, 1>>(b.data() + layer * plane, plane)
+              .template cast<double>()
+              .sum();
+      broad_mass_[static_cast<std::size_t>(layer)] = m;
+      broad_total_ += m;
+    }
+    const auto block = [](double sigma) {
+      return std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::floor(sigma / 2.0)));
+    };
+    const Eigen::Index fx = block(sx), fy = block(sy);
+    const Eigen::Index rc = (rows + fy - 1) / fy, cc = (cols + fx - 1) / fx;
+    // Each state's place among the block centres (centre k at state (k + 0.5) f - 0.5), clamped
+    // to the first and last: the lower centre and the weight of the upper one.
+    const auto weights = [](Eigen::Index n, Eigen::Index f, Eigen::Index coarse,
+                            std::vector<Eigen::Index>& lo, std::vector<double>& a) {
+      lo.resize(static_cast<std::size_t>(n));
+      a.resize(static_cast<std::size_t>(n));
+      for (Eigen::Index k = 0; k < n; ++k) {
+        const double c = std::clamp((static_cast<double>(k) + 0.5) / static_cast<double>(f) - 0.5,
+                                    0.0, static_cast<double>(coarse - 1));
+        const auto c0 = std::min(static_cast<Eigen::Index>(c), coarse - 1);
+        lo[static_cast<std::size_t>(k)] = c0;
+        a[static_cast<std::size_t>(k)] = c - static_cast<double>(c0);
+      }
+    };
+    weights(cols, fx, cc, x_lo_, x_a_);
+    weights(rows, fy, rc, y_lo_, y_a_);
+    // To the blocks: each state's mass (every plane's) split between its two nearest centres
+    // along y, whole rows at a time, then along x — the transpose of the interpolation back, so
+    // the mean stays where it was.
+    coarse_rows_.setZero(rc, cols);
+    block_row_.resize(cols);
+    for (Eigen::Index i = 0; i < rows; ++i) {
+      block_row_.setZero();
+      for (Eigen::Index layer = 0; layer < layers; ++layer)
+        block_row_ += Eigen::Map<const Eigen::Array<scalar, Eigen::Dynamic, 1>>(
+                          b.data() + layer * plane + i * cols, cols)
+                          .template cast<double>();
+      const auto y0 = y_lo_[static_cast<std::size_t>(i)];
+      const double a = y_a_[static_cast<std::size_t>(i)];
+      coarse_rows_.row(y0) += (1.0 - a) * block_row_.transpose();
+      if (a > 0.0) coarse_rows_.row(y0 + 1) += a * block_row_.transpose();
+    }
+    coarse_.setZero(rc, cc);
+    for (Eigen::Index r = 0; r < rc; ++r)
+      for (Eigen::Index j = 0; j < cols; ++j) {
+        const auto x0 = x_lo_[static_cast<std::size_t>(j)];
+        const double a = x_a_[static_cast<std::size_t>(j)];
+        coarse_(r, x0) += (1.0 - a) * coarse_rows_(r, j);
+        if (a > 0.0) coarse_(r, x0 + 1) += a * coarse_rows_(r, j);
+      }
+    // What is left to spread on the blocks, in blocks: a Gaussian of that spread along each
+    // axis (truncated at 3 sigma + 1 block, zero outside), whole rows at a time. Splitting and
+    // interpolating each spread f^2 / 6 states^2 on average over a state's place between centres.
+    const auto residual = [](double sigma, Eigen::Index f) {
+      const double fd = static_cast<double>(f);
+      const double split = f > 1 ? fd * fd / 3.0 : 0.0;
+      return std::sqrt(std::max(0.0, sigma * sigma - split)) / fd;
+    };
+    gaussian_down(coarse_, coarse_scratch_, row_sum_, residual(sy, fy));
+    coarse_t_ = coarse_.transpose();
+    gaussian_down(coarse_t_, coarse_scratch_, row_sum_, residual(sx, fx));
+    coarse_ = coarse_t_.transpose();
+    // Back to the states: along x into rc rows of cols values, then along y row by row.
+    for (Eigen::Index r = 0; r < rc; ++r)
+      for (Eigen::Index j = 0; j < cols; ++j) {
+        const auto x0 = x_lo_[static_cast<std::size_t>(j)];
+        const double a = x_a_[static_cast<std::size_t>(j)];
+        coarse_rows_(r, j) = (1.0 - a) * coarse_(r, x0) + (a > 0.0 ? a * coarse_(r, x0 + 1) : 0.0);
+      }
+    broad_.resize(rows, cols);
+    const double density = 1.0 / static_cast<double>(fx * fy);
+    for (Eigen::Index i = 0; i < rows; ++i) {
+      const auto y0 = y_lo_[static_cast<std::size_t>(i)];
+      const double a = y_a_[static_cast<std::size_t>(i)];
+      broad_.row(i) = ((1.0 - a) * density) * coarse_rows_.row(y0);
+      if (a > 0.0) broad_.row(i) += (a * density) * coarse_rows_.row(y0 + 1);
+    }
+    broad_sum_ = broad_.sum();
+  }
+
+  // `a` blurred down its columns by a Gaussian of `sigma` rows (zero outside: mass blurred past
+  // the first or last row is dropped), `b` as scratch; each output row a weighted sum of whole
+  // input rows. `k`: the kernel's workspace.
+  static void gaussian_down(image<double>& a, image<double>& b, std::vector<double>& k,
+                            double sigma) {
+    if (sigma <= 0.0) return;
+    const Eigen::Index rows = a.rows();
+    const auto reach = static_cast<Eigen::Index>(std::ceil(3.0 * sigma)) + 1;
+    k.resize(static_cast<std::size_t>(2 * reach + 1));
+    double sum = 0.0;
+    for (Eigen::Index d = -reach; d <= reach; ++d) {
+      const double v = std::exp(-0.5 * static_cast<double>(d * d) / (sigma * sigma));
+      k[static_cast<std::size_t>(d + reach)] = v;
+      sum += v;
+    }
+    b.setZero(rows, a.cols());
+    for (Eigen::Index i = 0; i < rows; ++i)
+      for (Eigen::Index d = std::max(-reach, -i); d <= std::min(reach, rows - 1 - i); ++d)
+        b.row(i) += (k[static_cast<std::size_t>(d + reach)] / sum) * a.row(i + d);
+    a.swap(b);
   }
 
   // Radii up to which a float belief's blur sums 2 r + 1 values per output directly, in float,
@@ -340,6 +497,14 @@ class robust_motion {
   // were zeroed for.
   mutable std::vector<float> padded_a_, padded_b_, row_a_, row_b_;
   mutable std::array<Eigen::Index, 4> padded_shape_{};  // rows, cols, rx, ry
+  // The broad component's workspaces (`broad_density`): the position marginal's blocks (and
+  // their transpose and the passes' other buffer), the blocks interpolated along x, the
+  // density, a block row's sums, the interpolation's indices and weights, the planes' masses.
+  mutable image<double> coarse_, coarse_t_, coarse_scratch_, coarse_rows_, broad_;
+  mutable Eigen::ArrayXd block_row_;
+  mutable std::vector<Eigen::Index> x_lo_, y_lo_;
+  mutable std::vector<double> x_a_, y_a_, broad_mass_;
+  mutable double broad_total_ = 0.0, broad_sum_ = 0.0;
 };
 
 }  // namespace tacmap
