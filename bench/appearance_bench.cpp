@@ -126,15 +126,13 @@ void pose_touch_latent(benchmark::State& state) {
 BENCHMARK(pose_touch_latent)->Unit(benchmark::kMillisecond);
 
 // The localizer's pose filter (make_pose_filter: 36 headings, both appearances, the motion
-// floor) without robust_motion's wide and broad components and with them (the default: one
-// wide blur per heading layer, one broad density for all): their ratio is those components'
-// cost per pose touch.
+// floor) without robust_motion's wide component and with it (the default, one blur per heading
+// layer): their ratio is the wide component's cost per pose touch.
 void pose_touch_default_filter(benchmark::State& state, double wide) {
   const auto map = bench_map();
   tacmap::localizer_config c;
   c.headings = 36;
   c.wide_probability = wide;
-  c.broad_probability = wide > 0.0 ? tacmap::localizer_config::default_broad_probability : 0.0;
   auto filter = tacmap::make_pose_filter(c, map, 3.4 / 3.0, {.width = 18, .height = 42});
   time_touches(state, filter, map, {.du_mm = 4.5, .dv_mm = 0.0, .dtheta_rad = 0.0},
                {.du_mm = -4.5, .dv_mm = 0.0, .dtheta_rad = 0.0});

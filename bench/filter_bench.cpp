@@ -94,8 +94,8 @@ void predict_wide(benchmark::State& state) {
 }
 BENCHMARK(predict_wide);
 
-// ... and the broad component (b = 0.05 of 10 mm, the localizer's default): on blocks of 4 x 4
-// states, interpolated back.
+// ... and the broad component (b = 0.05 of 10 mm, the measured choice; off by default): on
+// block centres 4 states apart, interpolated back.
 void predict_broad(benchmark::State& state) {
   predict_robust_with(state, {.lost_probability = 0.001,
                               .wide_probability = 0.1,

@@ -21,7 +21,7 @@
 // noise larger than configured, a few mm; broad: the object slipped in the grasp, about a
 // centimetre) and Z what remains on the grid. The broad component is computed on blocks of
 // about sigma / 2 states and interpolated back, pooled over the planes (a slip moves the
-// object, not its appearance or the heading).
+// object; one density for all planes keeps its cost to about a plane's pass).
 #pragma once
 
 #include <algorithm>
@@ -81,15 +81,16 @@ struct robust_motion_params {
 };
 
 /// `M`'s prediction mixed with a uniform floor (see the file's comment). Models
-/// `motion_model<G>` for every grid `M` does. Keeps the wide component's workspaces between
-/// predictions, like the base models: one object is not reentrant (one filter per thread).
+/// `motion_model<G>` for every grid `M` does. Keeps the wide and broad components' workspaces
+/// between predictions, like the base models: one object is not reentrant (one filter per
+/// thread).
 template <class M>
 class robust_motion {
  public:
   using control_type = typename M::control_type;
   using base_type = M;
 
-  /// Throws std::invalid_argument for a lost probability outside [0, 1).
+  /// Throws std::invalid_argument for parameters `robust_motion_params::validate` refuses.
   explicit robust_motion(M base, robust_motion_params params = {})
       : base_(std::move(base)), params_(params) {
     params_.validate();
@@ -159,7 +160,7 @@ class robust_motion {
         }
         if (wb > 0.0) {
           // This plane's part of the broad component: its share of the mass, spread like the
-          // position marginal (a slip moves the object, not its appearance or the heading).
+          // position marginal (one density for all planes, `broad_density`).
           const double share = wb * broad_mass_[static_cast<std::size_t>(layer)] / broad_total_;
           img += (broad_ * share).template cast<scalar>();
           total += share * broad_sum_;
@@ -169,7 +170,7 @@ class robust_motion {
       // floor: out = (1 - lambda) out / total + lambda / N.
       if (!(total > 0.0 && std::isfinite(total)))
         detail::fail<std::logic_error>(
-            "robust_motion: the prediction's mass after the wide component is ", total,
+            "robust_motion: the prediction's mass after the wide and broad components is ", total,
             "; expected a positive finite sum (the base model's prediction held no "
             "finite mass)");
       out = out * static_cast<scalar>((1.0 - lambda) / total) +
@@ -196,48 +197,45 @@ class robust_motion {
 
   // The broad component's density over one plane (`broad_`, rows x cols), from the position
   // marginal of `b` (its planes summed; `broad_mass_` each plane's mass, `broad_total_` their
-  // sum): summed into blocks of fy x fx states (f = sigma / 2 states, rounded down: the blocks
-  // still resolve the spread), blurred there by a Gaussian of what the blocks and the
-  // interpolation back do not already spread (their variances (f^2 - 1) / 12 and f^2 / 6
-  // states^2: the three add up to sigma^2), zero outside, and interpolated back bilinearly
-  // (clamped at the edges). `broad_sum_`: the mass kept on the grid. A spread of 10 mm costs
-  // about what a plane's copy does: the blocks are few.
+  // sum), on a lattice of block centres f = sigma / 2 states apart (rounded down: they still
+  // resolve the spread) reaching one centre past each end of the grid: each state's mass split
+  // between its two nearest centres per axis (bilinear weights), blurred there by a Gaussian of
+  // the spread the split and the way back do not already give (f^2 / 6 each on average), and
+  // spread back with the same weights (each centre's tent sums to f over the states, so its
+  // mass divided by f per axis; what lands past the grid's ends is dropped, like what the blur
+  // carries past the lattice). The split is the transpose of the way back: the mean stays where
+  // it was. `broad_sum_`: the mass kept on the grid. One density for all planes is what keeps
+  // the cost to about a plane's pass: a cost approximation (each plane blurred on its own would
+  // keep, e.g., each heading's broad mass near that heading's own mass).
   template <class Belief>
   void broad_density(const Belief& b, Eigen::Index rows, Eigen::Index cols, double sx,
                      double sy) const {
     using scalar = typename Belief::Scalar;
     const Eigen::Index plane = rows * cols, layers = b.size() / plane;
     broad_mass_.assign(static_cast<std::size_t>(layers), 0.0);
-    broad_total_ = 0.0;
-    for (Eigen::Index layer = 0; layer < layers; ++layer) {
-      const double m =
-          Eigen::Map<const Eigen::Array<scalar, Eigen::Dynamic, 1>>(b.data() + layer * plane, plane)
-              .template cast<double>()
-              .sum();
-      broad_mass_[static_cast<std::size_t>(layer)] = m;
-      broad_total_ += m;
-    }
     const auto block = [](double sigma) {
       return std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::floor(sigma / 2.0)));
     };
     const Eigen::Index fx = block(sx), fy = block(sy);
-    const Eigen::Index rc = (rows + fy - 1) / fy, cc = (cols + fx - 1) / fx;
-    // Each state's place among the block centres (centre k at state (k + 0.5) f - 0.5), clamped
-    // to the first and last: the lower centre and the weight of the upper one.
-    const auto weights = [](Eigen::Index n, Eigen::Index f, Eigen::Index coarse,
-                            std::vector<Eigen::Index>& lo, std::vector<double>& a) {
+    // Block centres f states apart, centre k + 1 at state k f + (f - 1) / 2, with one more
+    // beyond each end of the grid, so that every state lies between two centres and each
+    // centre's weights (a tent) are whole: none clamped at the ends, the mean kept everywhere.
+    // Per state: the index of the centre below and the weight of the one above.
+    const auto weights = [](Eigen::Index n, Eigen::Index f, std::vector<Eigen::Index>& lo,
+                            std::vector<double>& a) {
       lo.resize(static_cast<std::size_t>(n));
       a.resize(static_cast<std::size_t>(n));
+      const double fd = static_cast<double>(f), offset = 0.5 * (fd - 1.0);
       for (Eigen::Index k = 0; k < n; ++k) {
-        const double c = std::clamp((static_cast<double>(k) + 0.5) / static_cast<double>(f) - 0.5,
-                                    0.0, static_cast<double>(coarse - 1));
-        const auto c0 = std::min(static_cast<Eigen::Index>(c), coarse - 1);
-        lo[static_cast<std::size_t>(k)] = c0;
-        a[static_cast<std::size_t>(k)] = c - static_cast<double>(c0);
+        const double u = (static_cast<double>(k) - offset) / fd;
+        const double below = std::floor(u);
+        lo[static_cast<std::size_t>(k)] = static_cast<Eigen::Index>(below) + 1;
+        a[static_cast<std::size_t>(k)] = u - below;
       }
+      return (n + f - 1) / f + 2;
     };
-    weights(cols, fx, cc, x_lo_, x_a_);
-    weights(rows, fy, rc, y_lo_, y_a_);
+    const Eigen::Index cc = weights(cols, fx, x_lo_, x_a_);
+    const Eigen::Index rc = weights(rows, fy, y_lo_, y_a_);
     // To the blocks: each state's mass (every plane's) split between its two nearest centres
     // along y, whole rows at a time, then along x — the transpose of the interpolation back, so
     // the mean stays where it was.
@@ -245,15 +243,21 @@ class robust_motion {
     block_row_.resize(cols);
     for (Eigen::Index i = 0; i < rows; ++i) {
       block_row_.setZero();
-      for (Eigen::Index layer = 0; layer < layers; ++layer)
-        block_row_ += Eigen::Map<const Eigen::Array<scalar, Eigen::Dynamic, 1>>(
-                          b.data() + layer * plane + i * cols, cols)
-                          .template cast<double>();
+      for (Eigen::Index layer = 0; layer < layers; ++layer) {
+        const Eigen::Map<const Eigen::Array<scalar, Eigen::Dynamic, 1>> row(
+            b.data() + layer * plane + i * cols, cols);
+        // The plane's mass a row at a time: a sum in the row's own precision (vectorised; a
+        // sum of casts is a chain of dependent adds), added up in double.
+        broad_mass_[static_cast<std::size_t>(layer)] += static_cast<double>(row.sum());
+        block_row_ += row.template cast<double>();
+      }
       const auto y0 = y_lo_[static_cast<std::size_t>(i)];
       const double a = y_a_[static_cast<std::size_t>(i)];
       coarse_rows_.row(y0) += (1.0 - a) * block_row_.transpose();
       if (a > 0.0) coarse_rows_.row(y0 + 1) += a * block_row_.transpose();
     }
+    broad_total_ = 0.0;
+    for (const double m : broad_mass_) broad_total_ += m;
     coarse_.setZero(rc, cc);
     for (Eigen::Index r = 0; r < rc; ++r)
       for (Eigen::Index j = 0; j < cols; ++j) {
@@ -263,17 +267,19 @@ class robust_motion {
         if (a > 0.0) coarse_(r, x0 + 1) += a * coarse_rows_(r, j);
       }
     // What is left to spread on the blocks, in blocks: a Gaussian of that spread along each
-    // axis (truncated at 3 sigma + 1 block, zero outside), whole rows at a time. Splitting and
-    // interpolating each spread f^2 / 6 states^2 on average over a state's place between centres.
+    // axis (truncated at 3 sigma + 1 block, zero outside), one matrix product per axis. Splitting
+    // and interpolating each spread f^2 / 6 states^2 on average over a state's place between
+    // centres.
     const auto residual = [](double sigma, Eigen::Index f) {
       const double fd = static_cast<double>(f);
       const double split = f > 1 ? fd * fd / 3.0 : 0.0;
       return std::sqrt(std::max(0.0, sigma * sigma - split)) / fd;
     };
-    gaussian_down(coarse_, coarse_scratch_, row_sum_, residual(sy, fy));
-    coarse_t_ = coarse_.transpose();
-    gaussian_down(coarse_t_, coarse_scratch_, row_sum_, residual(sx, fx));
-    coarse_ = coarse_t_.transpose();
+    gaussian_matrix(rc, residual(sy, fy), gauss_y_, gauss_y_key_);
+    gaussian_matrix(cc, residual(sx, fx), gauss_x_, gauss_x_key_);
+    coarse_scratch_.resize(rc, cc);
+    coarse_scratch_.matrix().noalias() = gauss_y_ * coarse_.matrix();
+    coarse_.matrix().noalias() = coarse_scratch_.matrix() * gauss_x_.transpose();
     // Back to the states: along x into rc rows of cols values, then along y row by row.
     for (Eigen::Index r = 0; r < rc; ++r)
       for (Eigen::Index j = 0; j < cols; ++j) {
@@ -282,7 +288,7 @@ class robust_motion {
         coarse_rows_(r, j) = (1.0 - a) * coarse_(r, x0) + (a > 0.0 ? a * coarse_(r, x0 + 1) : 0.0);
       }
     broad_.resize(rows, cols);
-    const double density = 1.0 / static_cast<double>(fx * fy);
+    const double density = 1.0 / static_cast<double>(fx * fy);  // a tent sums to f over states
     for (Eigen::Index i = 0; i < rows; ++i) {
       const auto y0 = y_lo_[static_cast<std::size_t>(i)];
       const double a = y_a_[static_cast<std::size_t>(i)];
@@ -292,26 +298,27 @@ class robust_motion {
     broad_sum_ = broad_.sum();
   }
 
-  // `a` blurred down its columns by a Gaussian of `sigma` rows (zero outside: mass blurred past
-  // the first or last row is dropped), `b` as scratch; each output row a weighted sum of whole
-  // input rows. `k`: the kernel's workspace.
-  static void gaussian_down(image<double>& a, image<double>& b, std::vector<double>& k,
-                            double sigma) {
-    if (sigma <= 0.0) return;
-    const Eigen::Index rows = a.rows();
-    const auto reach = static_cast<Eigen::Index>(std::ceil(3.0 * sigma)) + 1;
-    k.resize(static_cast<std::size_t>(2 * reach + 1));
-    double sum = 0.0;
-    for (Eigen::Index d = -reach; d <= reach; ++d) {
-      const double v = std::exp(-0.5 * static_cast<double>(d * d) / (sigma * sigma));
-      k[static_cast<std::size_t>(d + reach)] = v;
-      sum += v;
+  // `m`: the n x n matrix of a Gaussian blur of `sigma` samples along n (m(i, j): the share of
+  // sample j's mass that lands on i; truncated at 3 sigma + 1, each column normalised as if
+  // nothing were truncated, so what lands outside is dropped). Kept while n and sigma do not
+  // change (`key`): the kernel's exponentials cost more than the products.
+  static void gaussian_matrix(Eigen::Index n, double sigma, Eigen::MatrixXd& m,
+                              std::pair<Eigen::Index, double>& key) {
+    if (key.first == n && key.second == sigma && m.rows() == n) return;
+    m.setZero(n, n);
+    if (sigma <= 0.0) {
+      m.setIdentity();
+    } else {
+      const auto reach = static_cast<Eigen::Index>(std::ceil(3.0 * sigma)) + 1;
+      double sum = 0.0;
+      for (Eigen::Index d = -reach; d <= reach; ++d)
+        sum += std::exp(-0.5 * static_cast<double>(d * d) / (sigma * sigma));
+      for (Eigen::Index i = 0; i < n; ++i)
+        for (Eigen::Index j = std::max<Eigen::Index>(0, i - reach); j <= std::min(n - 1, i + reach);
+             ++j)
+          m(i, j) = std::exp(-0.5 * static_cast<double>((i - j) * (i - j)) / (sigma * sigma)) / sum;
     }
-    b.setZero(rows, a.cols());
-    for (Eigen::Index i = 0; i < rows; ++i)
-      for (Eigen::Index d = std::max(-reach, -i); d <= std::min(reach, rows - 1 - i); ++d)
-        b.row(i) += (k[static_cast<std::size_t>(d + reach)] / sum) * a.row(i + d);
-    a.swap(b);
+    key = {n, sigma};
   }
 
   // Radii up to which a float belief's blur sums 2 r + 1 values per output directly, in float,
@@ -497,10 +504,12 @@ class robust_motion {
   // were zeroed for.
   mutable std::vector<float> padded_a_, padded_b_, row_a_, row_b_;
   mutable std::array<Eigen::Index, 4> padded_shape_{};  // rows, cols, rx, ry
-  // The broad component's workspaces (`broad_density`): the position marginal's blocks (and
-  // their transpose and the passes' other buffer), the blocks interpolated along x, the
-  // density, a block row's sums, the interpolation's indices and weights, the planes' masses.
-  mutable image<double> coarse_, coarse_t_, coarse_scratch_, coarse_rows_, broad_;
+  // The broad component's workspaces (`broad_density`): the position marginal on the centres
+  // (and the products' other buffer), the centres interpolated along x, the density, a row of
+  // the marginal, the weights' indices and values, the planes' masses.
+  mutable image<double> coarse_, coarse_scratch_, coarse_rows_, broad_;
+  mutable Eigen::MatrixXd gauss_y_, gauss_x_;  // the blocks' blurs (`gaussian_matrix`)
+  mutable std::pair<Eigen::Index, double> gauss_y_key_{-1, 0.0}, gauss_x_key_{-1, 0.0};
   mutable Eigen::ArrayXd block_row_;
   mutable std::vector<Eigen::Index> x_lo_, y_lo_;
   mutable std::vector<double> x_a_, y_a_, broad_mass_;
