@@ -84,6 +84,17 @@ void planar_touch_default_filter_no_robust(benchmark::State& state) {
 }
 BENCHMARK(planar_touch_default_filter_no_robust)->Unit(benchmark::kMicrosecond);
 
+// The localizer's filter with the optional broad component (0.05 of 10 mm, off by default):
+// its cost per touch against planar_touch_default_filter.
+void planar_touch_default_filter_broad(benchmark::State& state) {
+  const auto map = bench_map();
+  tacmap::localizer_config config;
+  config.broad_probability = 0.05;
+  auto filter = tacmap::make_planar_filter(config, map, 3.4 / 3.0, {.width = 18, .height = 42});
+  time_touches(state, filter, map, {.dx_mm = 4.5, .dy_mm = 0.0}, {.dx_mm = -4.5, .dy_mm = 0.0});
+}
+BENCHMARK(planar_touch_default_filter_broad)->Unit(benchmark::kMicrosecond);
+
 void planar_touch_localizer(benchmark::State& state) {
   const auto map = bench_map();
   tacmap::localizer loc(map, 3.4 / 3.0);

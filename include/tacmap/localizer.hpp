@@ -181,10 +181,10 @@ struct localizer_config {
   /// Off by default. 0.05 of 10 mm, measured (realistic, seeds 1-3; README, "When exploration
   /// goes wrong"): 20 mm slips recovered 232 -> 262 of 315, kidnaps 421 -> 442 of 499, 10 %
   /// outliers of 8 mm 510 -> 517 of 594 localized, 3x the configured noise 441 -> 455, without
-  /// faults 581 -> 580; but a predict with it takes about 24 us more on the paper's grid (one
-  /// density per predict, one more pass per plane), above the 1.2x of a touch without robust
-  /// motion issue 13 allows, and the verdict hedges more without faults. Turn it on where
-  /// objects slip in the grasp.
+  /// faults 581 -> 580; but it adds about 16 us to a predict on the paper's grid (one density
+  /// per predict, one more pass per plane): a touch of this filter 147 -> 165 us, 1.32x the
+  /// same filter without robust motion, above the 1.2x issue 13 allows; and the verdict hedges
+  /// more without faults. Turn it on where objects slip in the grasp.
   static constexpr double default_broad_probability = 0.0;
   double broad_sigma_mm = 10.0;
   [[nodiscard]] double broad() const {
