@@ -61,37 +61,37 @@ tacmap::tactile_frame frame_at(const tacmap::image<float>& map, Eigen::Index row
   return f;
 }
 
-// The localizer's filter alone (make_planar_filter with the defaults: the model above behind
-// appearance_likelihood, and robust_motion's floor and wide component): predict + update, as
-// planar_touch_latent/one_pass, whose ratio to this is the robust motion's cost per touch.
-void planar_touch_default_filter(benchmark::State& state) {
+// `config`'s planar filter on the bench map, touches alternating between two places.
+void time_planar_filter(benchmark::State& state, const tacmap::localizer_config& config) {
   const auto map = bench_map();
-  auto filter = tacmap::make_planar_filter({}, map, 3.4 / 3.0, {.width = 18, .height = 42});
+  auto filter = tacmap::make_planar_filter(config, map, 3.4 / 3.0, {.width = 18, .height = 42});
   time_touches(state, filter, map, {.dx_mm = 4.5, .dy_mm = 0.0}, {.dx_mm = -4.5, .dy_mm = 0.0});
 }
+
+// The localizer's filter alone (make_planar_filter with the defaults: the model above behind
+// appearance_likelihood, and robust_motion's floor and wide component): predict + update, as
+// planar_touch_latent/one_pass; against planar_touch_default_filter_no_robust (below), the same
+// filter without robust motion, it is robust motion's cost per touch.
+void planar_touch_default_filter(benchmark::State& state) { time_planar_filter(state, {}); }
 BENCHMARK(planar_touch_default_filter)->Unit(benchmark::kMicrosecond);
 
 // The same filter with robust motion switched off (no floor, no wide or broad component): the
 // issue's "per-touch cost at most 1.2 x" is planar_touch_default_filter against this, same run.
 void planar_touch_default_filter_no_robust(benchmark::State& state) {
-  const auto map = bench_map();
   tacmap::localizer_config config;
   config.lost_probability = 0.0;
   config.wide_probability = 0.0;
   config.broad_probability = 0.0;
-  auto filter = tacmap::make_planar_filter(config, map, 3.4 / 3.0, {.width = 18, .height = 42});
-  time_touches(state, filter, map, {.dx_mm = 4.5, .dy_mm = 0.0}, {.dx_mm = -4.5, .dy_mm = 0.0});
+  time_planar_filter(state, config);
 }
 BENCHMARK(planar_touch_default_filter_no_robust)->Unit(benchmark::kMicrosecond);
 
 // The localizer's filter with the optional broad component (0.05 of 10 mm, off by default):
 // its cost per touch against planar_touch_default_filter.
 void planar_touch_default_filter_broad(benchmark::State& state) {
-  const auto map = bench_map();
   tacmap::localizer_config config;
   config.broad_probability = 0.05;
-  auto filter = tacmap::make_planar_filter(config, map, 3.4 / 3.0, {.width = 18, .height = 42});
-  time_touches(state, filter, map, {.dx_mm = 4.5, .dy_mm = 0.0}, {.dx_mm = -4.5, .dy_mm = 0.0});
+  time_planar_filter(state, config);
 }
 BENCHMARK(planar_touch_default_filter_broad)->Unit(benchmark::kMicrosecond);
 

@@ -25,6 +25,17 @@ tacmap::planar_grid<float> gecko_positions() {
   return {gecko().map_size(), gecko().mm_per_px, tacmap::tactile_window({}, gecko().mm_per_px)};
 }
 
+// A fast configuration (SIFT-lite on the shared dense field) whose moves are off by 8 mm with
+// probability p.
+tacmap::localization_config outlier_config(double p) {
+  tacmap::localization_config config;
+  config.model = tacmap::measurement_kind::lite;
+  config.features = tacmap::window_features::shared_dense;
+  config.faults.outlier_probability = p;
+  config.faults.outlier_mm = 8.0;
+  return config;
+}
+
 }  // namespace
 
 TEST_CASE("faults: none leaves the protocol's truth and odometry as they are") {
@@ -235,11 +246,7 @@ TEST_CASE("faults: a slip no direction keeps on the map is dropped, and says so"
 TEST_CASE("outlier oracle: told which moves are outliers, only those moves change") {
   // A third of the moves off by 8 mm: the told filter's touches are those of the filter not
   // told, bit for bit, up to the first outlier; that touch differs (the belief was spread).
-  tacmap::localization_config config;
-  config.model = tacmap::measurement_kind::lite;
-  config.features = tacmap::window_features::shared_dense;
-  config.faults.outlier_probability = 0.3;
-  config.faults.outlier_mm = 8.0;
+  auto config = outlier_config(0.3);
   tacmap::localization_experiment plain(gecko(), config);
   config.faults.oracle = tacmap::fault_oracle::told;
   tacmap::localization_experiment told(gecko(), config);
@@ -265,11 +272,7 @@ TEST_CASE("outlier oracle: told which moves are outliers, only those moves chang
 
 TEST_CASE("outlier oracle: told which moves are outliers, the filter follows them better") {
   // Every move off by 8 mm; the same sequences with and without being told which moves (all).
-  tacmap::localization_config config;
-  config.model = tacmap::measurement_kind::lite;
-  config.features = tacmap::window_features::shared_dense;
-  config.faults.outlier_probability = 1.0;
-  config.faults.outlier_mm = 8.0;
+  auto config = outlier_config(1.0);
   double error[2] = {0.0, 0.0};
   for (const auto oracle : {tacmap::fault_oracle::none, tacmap::fault_oracle::told}) {
     config.faults.oracle = oracle;

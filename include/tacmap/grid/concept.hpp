@@ -2,8 +2,10 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <concepts>
 #include <type_traits>
+#include <utility>
 
 #include "tacmap/config.hpp"
 
@@ -56,5 +58,19 @@ int > &&(G::dimension > 0) &&
 /// layer, each layer a row-major `rows() x cols()` image.
 template <state_grid G>
 using belief_array = Eigen::Array<typename G::scalar_type, Eigen::Dynamic, 1>;
+
+namespace detail {
+
+/// The distance (mm) between neighbouring states of a layer along x (columns) and along y
+/// (rows), from the first states' positions; 1 along an axis with a single state. For the
+/// whole-layer operations that work in states but are configured in millimetres.
+template <state_grid G>
+[[nodiscard]] std::pair<double, double> lattice_pitch_mm(const G& grid) {
+  const Eigen::Index rows = grid.rows(), cols = grid.cols();
+  return {cols > 1 ? std::abs(grid.state_mm(1)(0) - grid.state_mm(0)(0)) : 1.0,
+          rows > 1 ? std::abs(grid.state_mm(cols)(1) - grid.state_mm(0)(1)) : 1.0};
+}
+
+}  // namespace detail
 
 }  // namespace tacmap

@@ -120,9 +120,7 @@ class robust_motion {
       // mass blurred off a plane's edge is dropped (zero outside, at every pass) and the rest
       // renormalised, as the base model does with mass moved off the grid.
       const Eigen::Index rows = grid.rows(), cols = grid.cols(), plane = rows * cols;
-      const double pitch_x = cols > 1 ? std::abs(grid.state_mm(1)(0) - grid.state_mm(0)(0)) : 1.0;
-      const double pitch_y =
-          rows > 1 ? std::abs(grid.state_mm(cols)(1) - grid.state_mm(0)(1)) : 1.0;
+      const auto [pitch_x, pitch_y] = detail::lattice_pitch_mm(grid);
       const Eigen::Index rx = box_radius(params_.wide_sigma_mm / pitch_x);
       const Eigen::Index ry = box_radius(params_.wide_sigma_mm / pitch_y);
       const auto keep = static_cast<scalar>(1.0 - w - wb);

@@ -98,8 +98,7 @@ template <class Filter>
 void spread_over_ring(Filter& filter, double radius_mm, double share) {
   const auto& grid = filter.grid();
   const Eigen::Index rows = grid.rows(), cols = grid.cols(), plane = rows * cols;
-  const double pitch_x = cols > 1 ? std::abs(grid.state_mm(1)(0) - grid.state_mm(0)(0)) : 1.0;
-  const double pitch_y = rows > 1 ? std::abs(grid.state_mm(cols)(1) - grid.state_mm(0)(1)) : 1.0;
+  const auto [pitch_x, pitch_y] = detail::lattice_pitch_mm(grid);
   std::map<std::pair<Eigen::Index, Eigen::Index>, double> taps;  // (dy, dx) -> weight
   constexpr int directions = 720;
   for (int k = 0; k < directions; ++k) {
