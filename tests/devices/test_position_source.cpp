@@ -199,6 +199,37 @@ TEST_CASE("odometry_between: displacement in the map frame, wrapped heading chan
   CHECK(back.dyaw_rad == doctest::Approx(-(2 * pi - 6.0)));
 }
 
+TEST_CASE("odometry_between: timestamps too far apart for the clock's count are refused") {
+  using clock = std::chrono::steady_clock;
+  const map_calibration c = map_calibration::horizontal();
+  sensor_pose early = at(0.0, 0.0, 0.0);
+  sensor_pose late = at(1.0, 0.0, 0.0);
+  early.timestamp = clock::time_point(clock::duration(std::numeric_limits<clock::rep>::min()));
+  late.timestamp = clock::time_point(clock::duration(std::numeric_limits<clock::rep>::max()));
+  // max - min and min - max overflow a signed 64-bit count (undefined behaviour; it used to wrap
+  // to a small "elapsed" silently).
+  for (const auto& [a, b] : {std::pair{early, late}, std::pair{late, early}}) {
+    try {
+      (void)tacmap::odometry_between(a, b, c);
+      FAIL("no exception");
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      CHECK(what.find("odometry_between: the time from tick") != std::string::npos);
+      CHECK(what.find(std::to_string(std::numeric_limits<clock::rep>::max())) != std::string::npos);
+      CHECK(what.find("does not fit its 64-bit count") != std::string::npos);
+    }
+  }
+  // The widest differences that fit are exact, in both directions.
+  sensor_pose zero = at(0.0, 0.0, 0.0);
+  zero.timestamp = clock::time_point(clock::duration(0));
+  CHECK(tacmap::odometry_between(zero, late, c).elapsed.count() ==
+        std::numeric_limits<clock::rep>::max());
+  CHECK(tacmap::odometry_between(zero, early, c).elapsed.count() ==
+        std::numeric_limits<clock::rep>::min());
+  zero.timestamp = clock::time_point(clock::duration(-1));  // one tick more: max + 1
+  CHECK_THROWS_AS((void)tacmap::odometry_between(zero, late, c), std::invalid_argument);
+}
+
 TEST_CASE("odometry_between: invalid poses and calibrations are refused") {
   const sensor_pose good = at(0, 0, 0);
   sensor_pose bad = at(1, 2, 3);

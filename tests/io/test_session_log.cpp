@@ -140,8 +140,9 @@ TEST_CASE("session log: round trip of header, frames and poses, bit for bit") {
     written.emplace_back(frame_with(1234.5F, 0, 1'718'000'000'000'000'000LL));
     written.emplace_back(pose_with(0.1, 1'718'000'000'000'000'001LL));
     written.emplace_back(pose_with(-2.5e10, -42));
+    // The largest timestamp a log may hold, 2^62 ns (larger ones are refused: see below).
     written.emplace_back(frame_with(std::numeric_limits<float>::denorm_min(), 4'294'967'295U,
-                                    std::numeric_limits<std::int64_t>::max()));
+                                    std::int64_t{1} << 62));
     for (const auto& r : written) rec.record(r);
     CHECK(rec.records() == 4);
   }
@@ -343,6 +344,39 @@ TEST_CASE("session log: corrupt records of every kind name line and field") {
     CHECK(contains(e.what(), ex.expected));
     CHECK(contains(e.what(), "line " + std::to_string(ex.line)));
   }
+}
+
+TEST_CASE("session log: impossible timestamps are refused when reading and when writing") {
+  // |t_ns| <= 2^62 (146 years): two such timestamps always differ by less than 2^63 ns.
+  for (const std::string t : {"4611686018427387905", "-4611686018427387905", "9223372036854775807",
+                              "-9223372036854775808"}) {
+    CAPTURE(t);
+    const session_log_error e = error_for(good_header + "pose 1 0 0 0 0\npose " + t + " 0 0 0 0\n");
+    CHECK(e.line() == 4);
+    CHECK(e.field() == "field 2 (t_ns)");
+    CHECK(contains(e.what(), "line 4, field 2 (t_ns): t_ns = " + t));
+    CHECK(contains(e.what(), "expected |t_ns| <= 2^62"));
+    const session_log_error f = error_for(good_header + "frame " + t + " 0 1 2 3 4 5 6\n");
+    CHECK(contains(f.what(), "t_ns = " + t + " in this frame record"));
+  }
+  std::istringstream in(good_header + "pose 4611686018427387904 0 0 0 0\n" +
+                        "frame -4611686018427387904 0 1 2 3 4 5 6\n");
+  session_reader edge(in, "edge.session");
+  CHECK(edge.read_all().size() == 2);  // the bounds themselves are times
+
+  temp_dir dir;
+  const fs::path file = dir.path / "far.session";
+  {
+    session_recorder rec(file, full_header());
+    CHECK_THROWS_WITH_AS(rec.record(pose_with(1.0, std::numeric_limits<long long>::max())),
+                         doctest::Contains("pose timestamp 9223372036854775807 ns"),
+                         std::invalid_argument);
+    CHECK_THROWS_AS(rec.record(frame_with(1.0F, 3, std::numeric_limits<long long>::min())),
+                    std::invalid_argument);
+    rec.record(pose_with(2.0, 4));
+  }
+  session_reader reader(file);  // nothing of the refused records was written
+  CHECK(reader.read_all().size() == 1);
 }
 
 TEST_CASE("session log: NaN and infinity are refused when writing and when reading") {

@@ -30,9 +30,11 @@
 #include <cmath>
 #include <concepts>
 #include <cstddef>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -89,6 +91,27 @@ namespace detail {
   a = std::remainder(a, 2.0 * pi);  // [-pi, pi]
   return a <= -pi ? a + 2.0 * pi : a;
 }
+
+}  // namespace detail
+
+/// `to - from` on the steady clock, checked: the tick difference of two time points far apart
+/// (a corrupt log, an uninitialised timestamp) overflows the clock's signed 64-bit count, which
+/// is undefined behaviour in C++. Throws std::invalid_argument naming both ticks and `what`.
+[[nodiscard]] inline std::chrono::steady_clock::duration checked_elapsed(
+    std::chrono::steady_clock::time_point from, std::chrono::steady_clock::time_point to,
+    std::string_view what) {
+  using rep = std::chrono::steady_clock::rep;
+  const rep a = to.time_since_epoch().count();
+  const rep b = from.time_since_epoch().count();
+  if (b > 0 ? a < std::numeric_limits<rep>::min() + b : a > std::numeric_limits<rep>::max() + b)
+    detail::fail(what, ": the time from tick ", from.time_since_epoch().count(), " to tick ",
+                 to.time_since_epoch().count(),
+                 " of the steady clock does not fit its 64-bit count; expected timestamps of "
+                 "one clock, less than 292 years apart — one of them is corrupt or unset");
+  return std::chrono::steady_clock::duration(a - b);
+}
+
+namespace detail {
 
 /// The object plane of the Omni with the object lying on the table, seen from above with the
 /// device at the far edge of the map: device +x (right) is map x, device +z (toward the user) is
@@ -258,7 +281,8 @@ struct pose_change {
                    " rad); expected finite values — the position source delivered an invalid "
                    "sample");
   const Eigen::Vector2d d = calibration.displacement_to_map_mm(b.position_mm() - a.position_mm());
-  return {d.x(), d.y(), detail::wrap_angle(b.yaw_rad - a.yaw_rad), b.timestamp - a.timestamp};
+  return {d.x(), d.y(), detail::wrap_angle(b.yaw_rad - a.yaw_rad),
+          checked_elapsed(a.timestamp, b.timestamp, "odometry_between")};
 }
 
 /// A finite position source that hands out a fixed list of poses in order, then nothing:

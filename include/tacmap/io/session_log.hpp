@@ -29,7 +29,7 @@
 //                                          row (finite, >= 0); seq = the source's frame number
 //     pose <t_ns> <x_mm> <y_mm> <z_mm> <yaw_rad>   the sensor centre in the device frame
 //   t_ns: integer nanoseconds of the recording machine's steady clock (an arbitrary epoch: only
-//   differences mean something, and frames and poses share the clock).
+//   differences mean something, and frames and poses share the clock); |t_ns| <= 2^62.
 // * Numbers are decimal (as C, Python and MATLAB print them); never NaN or infinity.
 // * Every record is written and flushed as one line, so after a crash the file holds every record
 //   written before it, and at most the last line is cut off (then it lacks its "\n").
@@ -117,6 +117,10 @@ inline constexpr std::string_view session_magic = "tacmap-session";
 /// Taxels a frame may have: generous for tactile arrays, and it bounds what a corrupt header
 /// can make a reader allocate.
 inline constexpr Eigen::Index session_max_taxels = 65536;
+/// The largest |t_ns| a log may hold: 2^62 ns, 146 years of a steady clock's uptime. Anything
+/// beyond is a corrupt or unset timestamp, and within it any two timestamps differ by less than
+/// 2^63 ns, so their difference never overflows the clock's signed 64-bit count.
+inline constexpr std::int64_t session_max_abs_t_ns = std::int64_t{1} << 62;
 
 /// Keys the format itself defines (not available as extra keys).
 inline bool session_reserved_key(std::string_view key) {
@@ -346,6 +350,7 @@ class session_recorder {
   /// differs from the header's (nothing is written then), session_log_error when writing fails.
   void record(const tactile_frame& frame) {
     frame.validate();
+    check_time("frame", frame.timestamp);
     if (!header_.geometry)
       detail::fail(
           "session_recorder: a frame, but the session header has no geometry; set "
@@ -369,6 +374,7 @@ class session_recorder {
       detail::fail("session_recorder: pose (", pose.x_mm, ", ", pose.y_mm, ", ", pose.z_mm,
                    " mm, yaw ", pose.yaw_rad,
                    " rad) is not finite; expected a valid sample from the position source");
+    check_time("pose", pose.timestamp);
     line_.clear();
     detail::format_session_pose(line_, pose);
     write_line();
@@ -392,6 +398,15 @@ class session_recorder {
   [[nodiscard]] bool is_open() const { return file_ != nullptr; }
 
  private:
+  /// A timestamp the reader would refuse is not written (std::invalid_argument, nothing written).
+  static void check_time(std::string_view what, std::chrono::steady_clock::time_point t) {
+    const std::int64_t ns = detail::session_time_ns(t);
+    if (ns < -detail::session_max_abs_t_ns || ns > detail::session_max_abs_t_ns)
+      detail::fail("session_recorder: ", what, " timestamp ", ns,
+                   " ns is not a steady-clock time; expected |t| <= 2^62 ns (146 years) — set "
+                   "it from std::chrono::steady_clock::now()");
+  }
+
   void write_line() {
     if (file_ == nullptr || broken_)
       throw session_log_error("session log " + path_.string() +
@@ -655,6 +670,17 @@ class session_reader {
     return *v;
   }
 
+  /// Field 2 of a record: t_ns, at most 2^62 in magnitude (`detail::session_max_abs_t_ns`).
+  std::int64_t t_ns(const pending_line& line, std::string_view token, std::string_view record) {
+    const auto t = number<std::int64_t>(line, token, 2, "t_ns", record);
+    if (t < -detail::session_max_abs_t_ns || t > detail::session_max_abs_t_ns)
+      fail_at(line.number, "field 2 (t_ns)", "t_ns = ", t, " in this ", record,
+              " record is not a steady-clock time; expected |t_ns| <= 2^62 (",
+              detail::session_max_abs_t_ns,
+              " ns, 146 years) — the timestamp is corrupt or was never set");
+    return t;
+  }
+
   void read_header() {
     pending_line line;
     if (!read_line(line))
@@ -783,7 +809,7 @@ class session_reader {
                 " values; expected 5: 'pose <t_ns> <x_mm> <y_mm> <z_mm> <yaw_rad>'",
                 f.size() < 6 ? " (the line may have been cut short)" : "");
       sensor_pose p;
-      p.timestamp = detail::session_time_point(number<std::int64_t>(line, f[1], 2, "t_ns", "pose"));
+      p.timestamp = detail::session_time_point(t_ns(line, f[1], "pose"));
       p.x_mm = number<double>(line, f[2], 3, "x_mm", "pose");
       p.y_mm = number<double>(line, f[3], 4, "y_mm", "pose");
       p.z_mm = number<double>(line, f[4], 5, "z_mm", "pose");
@@ -806,8 +832,7 @@ class session_reader {
                 f.size() < 3 + n ? " (the line may have been cut short)" : "");
       tactile_frame frame;
       frame.geometry = g;
-      frame.timestamp =
-          detail::session_time_point(number<std::int64_t>(line, f[1], 2, "t_ns", "frame"));
+      frame.timestamp = detail::session_time_point(t_ns(line, f[1], "frame"));
       frame.sequence = number<std::uint32_t>(line, f[2], 3, "seq", "frame");
       frame.counts.resize(g.rows, g.cols);
       for (std::size_t k = 0; k < n; ++k) {
