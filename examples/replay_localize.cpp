@@ -187,8 +187,8 @@ int generate(const fs::path& folder) {
 
 // ---- the replay ---------------------------------------------------------------------------
 
-int replay(const fs::path& file) {
-  tacmap::session_reader log(file);
+int replay(const fs::path& file, bool accept_truncated_tail) {
+  tacmap::session_reader log(file, {.accept_truncated_tail = accept_truncated_tail});
   const tacmap::session_header& h = log.header();
   if (!h.geometry || !h.mm_per_px || !h.calibration || h.map_file.empty()) {
     std::fprintf(stderr,
@@ -235,7 +235,9 @@ int replay(const fs::path& file) {
     // Once converged (three touches) the filter must *track*: right after each move the estimate
     // rests on the odometry, so a wrong calibration or sign shows up as an error of several mm.
     if (touches > 3) worst_tracking_mm = std::max(worst_tracking_mm, error_mm);
-    const double t = std::chrono::duration<double>(frame.timestamp - *t0).count();
+    const double t = std::chrono::duration<double>(
+                         tacmap::checked_elapsed(*t0, frame.timestamp, "replay: frame time"))
+                         .count();
     std::printf("%5u  %5.2f  %9.2f   (%6.1f, %6.1f)  (%6.1f, %6.1f)  %9.2f  %7.2f\n",
                 frame.sequence, t, std::hypot(moved.dx_mm, moved.dy_mm), r.position_mm.x(),
                 r.position_mm.y(), truth.x(), truth.y(), error_mm, r.entropy_nats);
@@ -254,7 +256,8 @@ int replay(const fs::path& file) {
     const auto& pose = std::get<tacmap::sensor_pose>(*record);
     if (waiting) {
       const auto gap = [&](const tacmap::sensor_pose& q) {
-        return std::chrono::abs(q.timestamp - waiting->timestamp);
+        return std::chrono::abs(
+            tacmap::checked_elapsed(waiting->timestamp, q.timestamp, "replay: frame-pose gap"));
       };
       touch(*waiting, before && gap(*before) <= gap(pose) ? *before : pose);
       waiting.reset();
@@ -262,6 +265,10 @@ int replay(const fs::path& file) {
     before = pose;
   }
   if (waiting && before) touch(*waiting, *before);
+  if (log.stats().truncated_line != 0)
+    std::printf("dropped line %llu (%zu bytes), cut off by a crash while it was written\n",
+                static_cast<unsigned long long>(log.stats().truncated_line),
+                log.stats().truncated_bytes);
   std::printf("%d touches used, %d frames rejected (sensor lifted, or no pose), %llu poses\n",
               touches, rejected, static_cast<unsigned long long>(log.stats().poses));
   if (touches < 5 || error_mm < 0.0 || error_mm >= 3.0 || worst_tracking_mm >= 2.5) {
@@ -281,13 +288,22 @@ int replay(const fs::path& file) {
 int main(int argc, char** argv) {
   try {
     if (argc == 3 && std::string(argv[1]) == "--generate") return generate(argv[2]);
-    if (argc > 2 || (argc == 2 && argv[1][0] == '-')) {
+    // --accept-truncated-tail: a log whose last line was cut off by a crash is replayed without
+    // that line (session_read_options::accept_truncated_tail); without it, such a log is refused.
+    std::vector<std::string> args(argv + 1, argv + argc);
+    const auto tail = std::find(args.begin(), args.end(), "--accept-truncated-tail");
+    const bool accept_truncated_tail = tail != args.end();
+    if (accept_truncated_tail) args.erase(tail);
+    if (args.size() > 1 || (args.size() == 1 && args[0].starts_with('-'))) {
       std::fprintf(stderr,
-                   "usage: replay_localize [session-file]\n"
-                   "       replay_localize --generate <folder>\n");
+                   "usage: replay_localize [--accept-truncated-tail] [session-file]\n"
+                   "       replay_localize --generate <folder>\n"
+                   "  --accept-truncated-tail  replay a log whose last line a crash cut off,\n"
+                   "                           without that line (default: refuse the log)\n");
       return 2;
     }
-    return replay(argc == 2 ? fs::path(argv[1]) : fs::path(TACMAP_DEMO_SESSION));
+    return replay(args.size() == 1 ? fs::path(args[0]) : fs::path(TACMAP_DEMO_SESSION),
+                  accept_truncated_tail);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "replay_localize: %s\n", e.what());
     return 2;

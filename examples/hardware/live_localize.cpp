@@ -28,6 +28,7 @@
 #include "tacmap/devices/phantom_omni_hdapi.hpp"
 #endif
 
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <concepts>
@@ -58,6 +59,7 @@ const char* const usage =
     "                     [--mm-per-px S]\n"
     "                     [--calibration UX UY UZ VX VY VZ ROT TX TY SCALE] [--frames N]\n"
     "                     [--period-ms P] [--record LOG] [--expect-error-mm E]\n"
+    "                     [--accept-truncated-tail]\n"
     "  --weiss PATH      the tactile sensor's serial port, e.g. /dev/ttyACM0\n"
     "  --emulate         an emulated sensor pressing the map where the position source says\n"
     "  --family F        wts (default) or dsacon32m\n"
@@ -68,8 +70,11 @@ const char* const usage =
     "  --map FILE.pgm    the visual map (default: the demo session's map)\n"
     "  --mm-per-px S     the map's scale (default 3.4/3, or the session's)\n"
     "  --calibration ... device frame -> map frame (default: the session's, else the table plane)\n"
-    "  --frames N        stop after N frames (default: when the position source ends)\n"
-    "  --period-ms P     WTS frame period (default 20 ms)\n"
+    "  --accept-truncated-tail  --poses: read a log whose last line a crash cut off, without\n"
+    "                    that line (default: refuse it)\n"
+    "  --frames N        stop after N frames, 1 .. 1000000000 (default: when the position\n"
+    "                    source ends)\n"
+    "  --period-ms P     WTS frame period, 1 .. 65535 ms (default 20 ms)\n"
     "  --record LOG      record frames and poses as a session log (replay_localize reads it)\n"
     "  --expect-error-mm E  exit 1 unless the final estimate is within E mm of the calibrated\n"
     "                    pose (for tests with a known calibration)\n";
@@ -89,11 +94,23 @@ struct config {
   int period_ms = 20;
   fs::path record;
   std::optional<double> expect_error_mm;
+  bool accept_truncated_tail = false;
 };
 
 [[noreturn]] void bad_usage(const std::string& why) {
   std::fprintf(stderr, "live_localize: %s\n%s", why.c_str(), usage);
   std::exit(2);
+}
+
+/// A whole number in [lo, hi]: "3.7", "1e30" and "-5" are refused, never truncated or wrapped.
+long integer(const char* text, const char* option, long lo, long hi) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text, &end, 10);
+  if (end == text || *end != '\0' || errno == ERANGE || v < lo || v > hi)
+    bad_usage(std::string(option) + " expects a whole number in " + std::to_string(lo) + " .. " +
+              std::to_string(hi) + ", got '" + text + "'");
+  return v;
 }
 
 double number(const char* text, const char* option) {
@@ -151,9 +168,12 @@ config parse(int argc, char** argv) {
       cal.scale = v[9];
       c.calibration = cal;
     } else if (a == "--frames") {
-      c.frames = static_cast<long>(number(value(i), "--frames"));
+      c.frames = integer(value(i), "--frames", 1, 1'000'000'000);
     } else if (a == "--period-ms") {
-      c.period_ms = static_cast<int>(number(value(i), "--period-ms"));
+      // The WTS start-periodic command carries the period as a u16 in ms.
+      c.period_ms = static_cast<int>(integer(value(i), "--period-ms", 1, 65535));
+    } else if (a == "--accept-truncated-tail") {
+      c.accept_truncated_tail = true;
     } else if (a == "--record") {
       c.record = value(i);
     } else if (a == "--expect-error-mm") {
@@ -314,7 +334,8 @@ int with_sensor(const config& c, Source& source, const tacmap::image<float>& map
 int live(const config& c) {
   const tacmap::image<float> map = tacmap::read_pgm(c.map);
   std::optional<tacmap::session_reader> log;
-  if (c.pose_source == config::source::poses) log.emplace(c.poses_file);
+  const tacmap::session_read_options read_options{.accept_truncated_tail = c.accept_truncated_tail};
+  if (c.pose_source == config::source::poses) log.emplace(c.poses_file, read_options);
   double mm_per_px = 3.4 / 3.0;
   if (log && log->header().mm_per_px) mm_per_px = *log->header().mm_per_px;
   if (c.mm_per_px) mm_per_px = *c.mm_per_px;
@@ -334,7 +355,7 @@ int live(const config& c) {
       window_at = [grid](std::uint32_t k) { return sweep_source::window(grid, k); };
     } else {
       std::vector<tacmap::grid_cell> windows;  // read the log's poses once more, ahead
-      tacmap::session_reader ahead(c.poses_file);
+      tacmap::session_reader ahead(c.poses_file, read_options);
       while (auto p = ahead.next_pose()) {
         const auto s =
             grid.nearest_state(calibration.to_map_mm(*p).x(), calibration.to_map_mm(*p).y());

@@ -14,12 +14,14 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <system_error>
 
 #include "tacmap/image.hpp"
 
@@ -49,7 +51,19 @@ inline std::string read_file(const std::filesystem::path& path, const char* what
          "' for reading; expected an existing, readable "
          "file — check the path (relative paths are resolved from the working directory '",
          std::filesystem::current_path().string(), "')");
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  // A folder opens as a stream on Linux, and reading it then throws a bare
+  // "basic_filebuf::underflow" (e.g. a session log's map line naming a folder): say what it is.
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    fail(what, ": '", path.string(),
+         "' is a folder, not an image file; expected the path of a file — check the path (or "
+         "the session log's 'map' line)");
+  try {
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  } catch (const std::exception& e) {
+    fail<std::runtime_error>(what, ": reading '", path.string(), "' failed (", e.what(),
+                             "); expected a readable file");
+  }
 }
 
 inline void write_file(const std::filesystem::path& path, const std::string& bytes,
