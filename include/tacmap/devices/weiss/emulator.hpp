@@ -11,27 +11,45 @@
 // A disconnect closes the pty and removes the link; after the down time a new pty appears
 // behind the same path, the way a udev name (/dev/serial/by-id/...) survives a replug.
 //
+// The folder, `tacmap-weiss-XXXXXX`, is made in `emulator_options::temp_dir`, else $TMPDIR,
+// else /tmp, and removed by the destructor. A process that dies without running it (SIGKILL,
+// SIGTERM/SIGINT/SIGHUP with the default action, a crash) leaves the folder behind: the library
+// installs no signal handlers (that would be global state, overriding the application's own).
+// Instead each folder holds a `lock` file that its emulator keeps flock()ed for its lifetime;
+// the kernel drops the lock when the process dies, however it dies. Every emulator, when it
+// starts, removes the folders in its temp folder whose lock nobody holds
+// (`remove_stale_emulator_dirs`, also callable on its own, e.g. from a signal-aware
+// application's shutdown or a test fixture). Folders of live emulators — in this process or
+// another, in any pid namespace — are never touched.
+//
 // POSIX only. Intended for tests and demos, not for production use.
 #pragma once
 
+#include <dirent.h>
 #include <fcntl.h>
 #include <poll.h>
-#include <stdlib.h>  // posix_openpt, grantpt, unlockpt, ptsname_r, mkdtemp
+#include <stdlib.h>    // posix_openpt, grantpt, unlockpt, ptsname_r, mkdtemp
+#include <sys/file.h>  // flock
+#include <sys/stat.h>
 #include <termios.h>
 #include <unistd.h>
 
 #include <array>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <deque>
 #include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -96,7 +114,72 @@ struct emulator_options {
   /// DSACON32m firmware R288 and older keep streaming after a single-frame request.
   bool legacy_single_frame = false;
   render_function render;  ///< empty: `moving_pattern`
+  /// Where the emulator's private folder is made; empty: $TMPDIR, else /tmp.
+  std::string temp_dir;
 };
+
+/// The folder emulators make their private folders in: `temp_dir` if given, else $TMPDIR (when
+/// set and not empty), else /tmp.
+inline std::string emulator_temp_dir(const std::string& temp_dir = {}) {
+  if (!temp_dir.empty()) return temp_dir;
+  const char* env = std::getenv("TMPDIR");  // NOLINT(concurrency-mt-unsafe): read only
+  return env != nullptr && *env != '\0' ? std::string(env) : std::string("/tmp");
+}
+
+namespace detail {
+inline constexpr std::string_view emulator_dir_prefix = "tacmap-weiss-";
+inline constexpr const char* emulator_lock_name = "lock";
+}  // namespace detail
+
+/// Removes the `tacmap-weiss-*` folders in `temp_dir` (see `emulator_temp_dir`) that emulators
+/// of dead processes left behind, and returns how many it removed. A folder is stale when its
+/// `lock` file is not flock()ed: a live emulator holds that lock, and the kernel releases it
+/// when its process dies, however it dies. Folders of other users, folders whose lock is held
+/// and anything that is not a folder of that name are left alone; a folder without a lock file
+/// (made by an older tacmap, which had none, or an emulator between mkdtemp and taking its
+/// lock) is removed only once it is older than `unlocked_grace`.
+inline std::size_t remove_stale_emulator_dirs(
+    const std::string& temp_dir = {},
+    std::chrono::seconds unlocked_grace = std::chrono::seconds(60)) {
+  const std::string base = emulator_temp_dir(temp_dir);
+  DIR* d = ::opendir(base.c_str());
+  if (d == nullptr) return 0;
+  std::vector<std::string> names;
+  while (const dirent* e = ::readdir(d)) {
+    const std::string_view name(e->d_name);
+    if (name.size() > detail::emulator_dir_prefix.size() &&
+        name.substr(0, detail::emulator_dir_prefix.size()) == detail::emulator_dir_prefix)
+      names.emplace_back(name);
+  }
+  ::closedir(d);
+  std::size_t removed = 0;
+  for (const std::string& name : names) {
+    const std::string dir = base + "/" + name;
+    struct stat st {};
+    if (::lstat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode) || st.st_uid != ::geteuid())
+      continue;
+    const std::string lock = dir + "/" + detail::emulator_lock_name;
+    const int fd = ::open(lock.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+    if (fd < 0) {
+      if (errno != ENOENT) continue;
+      const auto age =
+          std::chrono::system_clock::now() - std::chrono::system_clock::from_time_t(st.st_mtime);
+      if (age < unlocked_grace) continue;
+    } else {
+      const bool held = ::flock(fd, LOCK_EX | LOCK_NB) != 0;
+      if (held) {
+        ::close(fd);
+        continue;
+      }
+    }
+    // Ours now (or lockless and old): remove what an emulator puts there, then the folder.
+    for (const char* entry : {"tty", "tty.new", detail::emulator_lock_name})
+      ::unlink((dir + "/" + entry).c_str());
+    if (::rmdir(dir.c_str()) == 0) ++removed;
+    if (fd >= 0) ::close(fd);
+  }
+  return removed;
+}
 
 /// What the `emulator` has done so far (`emulator::stats()`).
 struct emulator_stats {
@@ -129,16 +212,29 @@ class emulator {
     if (5 + 2 * cells_total() + 2 > max_wire_payload)
       tacmap::detail::fail<std::invalid_argument>("weiss::emulator: ", cells_total(),
                                                   " cells do not fit one packet");
-    char dir_template[] = "/tmp/tacmap-weiss-XXXXXX";
-    if (::mkdtemp(dir_template) == nullptr)
-      tacmap::detail::fail<device_error>("weiss::emulator: mkdtemp failed: ", std::strerror(errno));
+    const std::string base = emulator_temp_dir(options_.temp_dir);
+    remove_stale_emulator_dirs(base);  // folders of emulators whose process was killed
+    std::string dir_template = base + "/" + std::string(detail::emulator_dir_prefix) + "XXXXXX";
+    if (::mkdtemp(dir_template.data()) == nullptr)
+      tacmap::detail::fail<device_error>("weiss::emulator: cannot make a folder in '", base,
+                                         "': ", std::strerror(errno),
+                                         "; expected a writable temp folder (TMPDIR or "
+                                         "emulator_options::temp_dir)");
     dir_ = dir_template;
     link_ = dir_ + "/tty";
+    lock_path_ = dir_ + "/" + detail::emulator_lock_name;
+    lock_fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0600);
+    if (lock_fd_ < 0 || ::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+      const int err = errno;
+      remove_dir();
+      tacmap::detail::fail<device_error>("weiss::emulator: cannot lock ", lock_path_, ": ",
+                                         std::strerror(err));
+    }
     start_ = clock::now();
     std::array<int, 2> wake{};
     if (::pipe(wake.data()) != 0) {
       const int err = errno;
-      ::rmdir(dir_.c_str());
+      remove_dir();
       tacmap::detail::fail<device_error>("weiss::emulator: pipe failed: ", std::strerror(err));
     }
     wake_read_ = wake[0];
@@ -151,7 +247,7 @@ class emulator {
       open_pty();
     } catch (...) {
       release_fds();
-      ::rmdir(dir_.c_str());
+      remove_dir();
       throw;
     }
     thread_ = std::thread([this] { run(); });
@@ -166,11 +262,13 @@ class emulator {
     if (thread_.joinable()) thread_.join();
     close_pty();
     release_fds();
-    ::rmdir(dir_.c_str());
+    remove_dir();
   }
 
   /// Stable path of the emulated device (a symlink to the current pty slave).
   const std::string& path() const noexcept { return link_; }
+  /// The emulator's private folder (holds `path()` and its lock file; removed by the destructor).
+  const std::string& folder() const noexcept { return dir_; }
   const emulator_options& options() const noexcept { return options_; }
 
   /// Writes `bytes` right before the next packet of `kind`.
@@ -255,6 +353,15 @@ class emulator {
   void wake() const noexcept {
     const std::uint8_t b = 1;
     (void)!::write(wake_write_, &b, 1);
+  }
+
+  /// The lock goes last: until the folder is gone, no other process may take it for stale.
+  void remove_dir() noexcept {
+    ::unlink(link_.c_str());
+    if (lock_fd_ >= 0) ::unlink(lock_path_.c_str());
+    ::rmdir(dir_.c_str());
+    if (lock_fd_ >= 0) ::close(lock_fd_);
+    lock_fd_ = -1;
   }
 
   void release_fds() noexcept {
@@ -627,6 +734,8 @@ class emulator {
   emulator_options options_;
   std::string dir_;
   std::string link_;
+  std::string lock_path_;
+  int lock_fd_ = -1;
   clock::time_point start_;
   int master_ = -1;
   int slave_ = -1;
