@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "tacmap/devices/weiss/codec.hpp"
@@ -42,6 +43,42 @@ TEST_CASE("crc16: table, check value, residue and the preamble value") {
   // Not CRC-16/CCITT-FALSE (0x29B1) nor X-25 (0x906E).
   CHECK(w::crc16(ascii("123456789")) != 0x29B1);
   CHECK(w::crc16(ascii("123456789")) != 0x906E);
+}
+
+TEST_CASE("crc16: the vendor's mix is weaker than a CRC (codec.hpp): 13 bits, blind bursts") {
+  // One step maps the state difference 0xA189 to 0: T[0x89] = 0x00A1.
+  CHECK(w::detail::crc16_table[0x89] == 0x00A1);
+  CHECK((w::crc16_update(0xA189, 0x00) ^ w::crc16_update(0x0000, 0x00)) == 0);
+  // After three steps the reachable states are 2^13 of the 2^16 (for all 65536 starts).
+  std::vector<bool> seen(65536);
+  std::size_t reachable = 0;
+  for (std::uint32_t s = 0; s < 65536U; ++s) {
+    std::uint16_t c = static_cast<std::uint16_t>(s);
+    for (int k = 0; k < 3; ++k) c = w::crc16_update(c, 0);
+    if (!seen[c]) ++reachable;
+    seen[c] = true;
+  }
+  CHECK(reachable == 8192);
+  // Exactly seven 2-byte bursts go unnoticed wherever three or more bytes follow them, in any
+  // message; a CRC-16 has none.
+  bytes message(40);
+  for (std::size_t i = 0; i < message.size(); ++i) message[i] = static_cast<std::uint8_t>(i * 37);
+  const std::uint16_t good = w::crc16(message);
+  std::vector<std::pair<int, int>> blind;
+  for (int a = 1; a < 256; ++a)
+    for (int b = 0; b < 256; ++b) {
+      bytes hit = message;
+      hit[17] = static_cast<std::uint8_t>(hit[17] ^ a);
+      hit[18] = static_cast<std::uint8_t>(hit[18] ^ b);
+      if (w::crc16(hit) == good) blind.emplace_back(a, b);
+    }
+  CHECK(blind == std::vector<std::pair<int, int>>{{0x0A, 0xC3},
+                                                  {0x17, 0x55},
+                                                  {0x1D, 0x96},
+                                                  {0x83, 0x62},
+                                                  {0x89, 0xA1},
+                                                  {0x94, 0x37},
+                                                  {0x9E, 0xF4}});
 }
 
 TEST_CASE("encode_packet: every WTS vector of the reference, byte for byte") {
