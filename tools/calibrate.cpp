@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_checks.hpp"
 #include "photo_maps.hpp"
 #include "tacmap/filter/confidence.hpp"
 #include "tacmap/sim/calibration.hpp"
@@ -60,7 +61,8 @@ int main(int argc, char** argv) try {
       ->check(CLI::ExistingDirectory);
   app.add_option("--model", model_name, "sift_lite or classic_sift (the default model)");
   app.add_option("--scenario", scenario_name, "ideal, realistic (default) or unknown");
-  app.add_option("--seed", seed, "seeds the simulator and the photographs' protocols (101)");
+  app.add_option("--seed", seed, "seeds the simulator and the photographs' protocols (101)")
+      ->check(CLI::NonNegativeNumber);  // an unsigned option: -1 would wrap
   app.add_option("--sequences", sequences, "use the first N sequences of each map (0 = all)");
   auto* map_px_option = app.add_option(
       "--map-px", map_px, "side of the photographs' square maps, px (120; resized by area)");
@@ -77,7 +79,8 @@ int main(int argc, char** argv) try {
                  "in the log score (0 = the nearest state)")
       ->check(CLI::Range(0.0, 10.0));
   app.add_option("--curve", curve_path, "write the log score curve (tau, score) to this CSV");
-  CLI11_PARSE(app, argc, argv);
+  app.footer(tacmap_tools::exit_status_footer);
+  if (const auto status = tacmap_tools::parse(app, argc, argv)) return *status;
   if (sequences < 0)
     throw CLI::ValidationError("--sequences", std::to_string(sequences) +
                                                   " is not a number of sequences; expected N >= 0 "

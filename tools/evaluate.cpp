@@ -42,6 +42,7 @@
 #include <system_error>
 #include <vector>
 
+#include "cli_checks.hpp"
 #include "library_evaluation.hpp"
 #include "photo_maps.hpp"
 #include "tacmap/sim/calibration.hpp"
@@ -375,7 +376,8 @@ int main(int argc, char** argv) try {
   app.add_flag("--native", native, "keep each photograph's own size as its map")
       ->excludes(map_px_option);
   app.add_option("--sequences", sequences, "run only the first N sequences of each map (0 = all)");
-  app.add_option("--seed", seed, "seeds the simulator and the photographs' protocols");
+  app.add_option("--seed", seed, "seeds the simulator and the photographs' protocols")
+      ->check(CLI::NonNegativeNumber);  // an unsigned option: -1 would wrap
   app.add_option("--tau", taus,
                  "temperature(s) (exponential shape / NCC), comma-separated; default: the model's")
       ->delimiter(',');
@@ -400,8 +402,9 @@ int main(int argc, char** argv) try {
       ->check(CLI::PositiveNumber);
   app.add_option("--output,-o", output, "CSV file to write");
   app.add_option(
-      "--min-success-rate", min_success,
-      "exit 1 when any map x configuration localizes fewer than this fraction of sequences");
+         "--min-success-rate", min_success,
+         "exit 1 when any map x configuration localizes fewer than this fraction of sequences")
+      ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--library", library,
                "which object, and where: every map is one object of one library; each sequence "
                "touches a random object, localized over the whole library (tables: recognition, "
@@ -426,7 +429,8 @@ int main(int argc, char** argv) try {
     for (auto& k : *knobs)
       app.add_option(k.flag, k.value, std::string(k.help) + " (default: the scenario's)")
           ->check(CLI::Range(k.lo, k.hi));
-  CLI11_PARSE(app, argc, argv);
+  app.footer(tacmap_tools::exit_status_footer);
+  if (const auto status = tacmap_tools::parse(app, argc, argv)) return *status;
   // The progress bar redraws one line with carriage returns: on a terminal only, never into
   // a log file.
   quiet = quiet || isatty(fileno(stderr)) == 0;
