@@ -636,6 +636,20 @@ struct arm_pose {
   double theta_rad = 0.0;  ///< the sensor's yaw in the arm's frame
 };
 
+namespace detail {
+/// `touch_at`'s motion between two finite arm poses: finite poses can still be too far apart
+/// for their difference (+DBL_MAX to -DBL_MAX overflows to infinity), which is no motion the
+/// filter can apply. Says so, naming both poses, instead of letting the motion model blame the
+/// position source for an infinite odometry.
+inline void check_arm_motion(const arm_pose& from, const arm_pose& to, double dx_mm, double dy_mm) {
+  if (!(std::isfinite(dx_mm) && std::isfinite(dy_mm)))
+    fail("localizer::touch_at: the arm moved from (", from.x_mm, ", ", from.y_mm, ") mm to (",
+         to.x_mm, ", ", to.y_mm, ") mm since the previous touch; the motion (", dx_mm, ", ", dy_mm,
+         ") mm overflows a double. Expected poses on one object, a few metres apart at "
+         "most — a coordinate is corrupt or in the wrong unit");
+}
+}  // namespace detail
+
 /// What one touch gave: the estimate, how sure the filter is of it, and what to do.
 struct touch_result {
   /// localized: act on `position_mm`; uncertain: touch again; contradicted: this touch fits
@@ -748,6 +762,7 @@ class localizer {
     std::optional<sensor_odometry> moved;
     if (last_pose_) {
       const double dx = where.x_mm - last_pose_->x_mm, dy = where.y_mm - last_pose_->y_mm;
+      detail::check_arm_motion(*last_pose_, where, dx, dy);
       const double turn = pose_grid<float>::wrap_angle(where.theta_rad - last_pose_->theta_rad);
       if (planar_) {
         if (std::abs(turn) > 5.0 * std::numbers::pi / 180.0)

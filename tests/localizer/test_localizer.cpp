@@ -300,4 +300,27 @@ TEST_CASE("localizer_config::patch_spacing reaches the descriptor model and is c
         }).find("spacing = 0") != std::string::npos);
 }
 
+TEST_CASE("touch_at: finite poses whose difference overflows are refused as such, state kept") {
+  const auto& p = gecko();
+  tacmap::localizer loc(p.map, p.mm_per_px, fast_config());
+  auto sim = gecko_simulator(5);
+  const auto frame = sim.render(p.locations[0].pose());
+  const double big = std::numeric_limits<double>::max();
+  (void)loc.touch_at(frame, {.x_mm = big, .y_mm = 0.0});
+  const tacmap::image<float> before = loc.belief();
+  // -DBL_MAX - DBL_MAX is -infinity: not the position source's fault (both poses are finite).
+  try {
+    (void)loc.touch_at(frame, {.x_mm = -big, .y_mm = 0.0});
+    FAIL("no exception");
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    CHECK(what.find("localizer::touch_at: the arm moved from (1.79769") != std::string::npos);
+    CHECK(what.find("overflows a double") != std::string::npos);
+    CHECK(what.find("position source") == std::string::npos);
+  }
+  CHECK((loc.belief() - before).abs().maxCoeff() == 0.0F);
+  // The previous pose is kept: a pose near it is an ordinary touch.
+  CHECK_NOTHROW((void)loc.touch_at(frame, {.x_mm = big, .y_mm = 1.0}));
+}
+
 }  // namespace test_localizer
