@@ -30,6 +30,7 @@
 #include <numbers>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "tacmap/devices/position_source.hpp"
@@ -306,6 +307,9 @@ int main(int argc, char** argv) {
                   accept_truncated_tail);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "replay_localize: %s\n", e.what());
+    if (std::string_view(e.what()).find("accept_truncated_tail") != std::string_view::npos)
+      std::fprintf(stderr,
+                   "replay_localize: give --accept-truncated-tail to use the records before it\n");
     return 2;
   }
 }

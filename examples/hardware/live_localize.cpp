@@ -40,6 +40,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #ifndef TACMAP_DEMO_MAP
@@ -410,6 +411,9 @@ int main(int argc, char** argv) {
     return live(c);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "live_localize: %s\n", e.what());
+    if (std::string_view(e.what()).find("accept_truncated_tail") != std::string_view::npos)
+      std::fprintf(stderr,
+                   "live_localize: give --accept-truncated-tail to use the records before it\n");
     return 2;
   }
 }
