@@ -88,7 +88,7 @@ int kill_and_wait(pid_t pid, int sig) {
 }  // namespace
 
 TEST_CASE(
-    "emulator folders: a process killed by any signal leaves one; the next start removes it") {
+    "emulator folders: a process killed by any signal leaves one, the next start removes it") {
   for (const int sig : {SIGKILL, SIGTERM, SIGINT, SIGHUP}) {
     CAPTURE(sig);
     scratch dir;
@@ -146,7 +146,7 @@ TEST_CASE("emulator folders: TMPDIR is honoured, then /tmp") {
                        tacmap::device_error);
 }
 
-TEST_CASE("emulator folders: lockless folders (older tacmap) go once old; other names stay") {
+TEST_CASE("emulator folders: lockless folders (older tacmap) go once old, other names stay") {
   scratch dir;
   const fs::path old_dir = dir.path / "tacmap-weiss-OLD123";
   const fs::path new_dir = dir.path / "tacmap-weiss-NEW456";
