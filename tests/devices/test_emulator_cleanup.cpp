@@ -153,7 +153,7 @@ TEST_CASE("emulator folders: lockless folders (older tacmap) go once old, other 
   const fs::path other = dir.path / "someone-else";
   for (const auto& p : {old_dir, new_dir, other}) fs::create_directory(p);
   ::symlink("/dev/null", (old_dir / "tty").c_str());
-  const utimbuf long_ago{::time(nullptr) - 3600, ::time(nullptr) - 3600};
+  const utimbuf long_ago{::time(nullptr) - 7200, ::time(nullptr) - 7200};  // 2 h > the 1 h grace
   REQUIRE(::utime(old_dir.c_str(), &long_ago) == 0);
   REQUIRE(::utime(other.c_str(), &long_ago) == 0);
   CHECK(w::remove_stale_emulator_dirs(dir.path.string()) == 1);

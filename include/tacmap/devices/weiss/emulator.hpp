@@ -137,10 +137,10 @@ inline constexpr const char* emulator_lock_name = "lock";
 /// when its process dies, however it dies. Folders of other users, folders whose lock is held
 /// and anything that is not a folder of that name are left alone; a folder without a lock file
 /// (made by an older tacmap, which had none, or an emulator between mkdtemp and taking its
-/// lock) is removed only once it is older than `unlocked_grace`.
+/// lock) is removed only once it is older than `unlocked_grace` (an hour: an older tacmap's
+/// emulator may still be running in another process, and it has no lock to show it).
 inline std::size_t remove_stale_emulator_dirs(
-    const std::string& temp_dir = {},
-    std::chrono::seconds unlocked_grace = std::chrono::seconds(60)) {
+    const std::string& temp_dir = {}, std::chrono::seconds unlocked_grace = std::chrono::hours(1)) {
   const std::string base = emulator_temp_dir(temp_dir);
   DIR* d = ::opendir(base.c_str());
   if (d == nullptr) return 0;
