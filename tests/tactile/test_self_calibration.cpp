@@ -79,6 +79,7 @@ TEST_CASE("self_calibration: recovers simulated gains and offsets, finds dead an
     f.counts(stuck_r, stuck_c) = 1500.0F;
     cal.observe(f);
   }
+  cal.refresh();  // the estimate from all 64 (observe redoes it every 8 touches with contact)
   CHECK(cal.touches() == 64);
   // Every dead taxel found, the stuck one found, no live taxel flagged.
   for (Eigen::Index r = 0; r < 14; ++r)
@@ -159,6 +160,7 @@ TEST_CASE("self_calibration: a healthy sensor is left as it is") {
     tacmap::tactile_simulator sim(blob_relief(raised), {120, 120}, mm_per_px, p);
     self_calibration cal;
     for (const tactile_frame& f : touches(sim, 64, 2)) cal.observe(f);
+    cal.refresh();
     CHECK(cal.live().all());
     double worst = 0.0;
     for (const tactile_frame& f : touches(sim, 20, 3)) {
@@ -192,6 +194,9 @@ TEST_CASE("self_calibration: too few touches leave a taxel as it is, with the re
   const std::string why = cal.reason(2, 3);
   CHECK(why.find("taxel (2, 3) is left as it is") != std::string::npos);
   CHECK(why.find("of the last 3; it needs 24") != std::string::npos);
+  // The estimate is redone every 8 usable touches, or on demand: still nothing to estimate.
+  cal.refresh();
+  CHECK(cal.status(2, 3) == taxel_status::unestimated);
   // Frames without contact are counted but not used.
   tactile_frame empty;
   empty.counts.setZero();
@@ -214,6 +219,9 @@ TEST_CASE("self_calibration: bad input is refused with a clear message") {
   CHECK(message_of([] {
           self_calibration c({}, {.window = 4, .min_touches = 8});
         }).find("min_touches = 8") != std::string::npos);
+  CHECK(message_of([] {
+          self_calibration c({}, {.refresh_every = 0});
+        }).find("refresh_every = 0") != std::string::npos);
   tactile_frame bad;
   bad.counts.setZero();
   bad.counts(1, 1) = -3.0F;
