@@ -342,6 +342,7 @@ int main(int argc, char** argv) try {
        {}},
       {"--partial-press-tilt", "contact: tilt of a partial press, degrees", 0.0, 20.0, {}},
   };
+  long long self_calibrate = -1;  // -1: off; N >= 0: on, after N warm-up touches
   std::vector<knob> scenario_knobs{
       {"--albedo-variation",
        "camera map: relative std of the print's surface texture",
@@ -515,6 +516,11 @@ int main(int argc, char** argv) try {
     for (auto& k : *knobs)
       app.add_option(k.flag, k.value, std::string(k.help) + " (default: the scenario's)")
           ->check(CLI::Range(k.lo, k.hi));
+  app.add_option("--self-calibrate", self_calibrate,
+                 "correct every frame by a self_calibration of the sensor "
+                 "(tactile/self_calibration.hpp) that has seen N touches at random poses before "
+                 "each sequence (e.g. 56; 0 = only the sequence's own); default: off")
+      ->check(CLI::Range(0LL, 100000LL));
   CLI11_PARSE(app, argc, argv);
   // The progress bar redraws one line with carriage returns: on a terminal only, never into
   // a log file.
@@ -594,6 +600,10 @@ int main(int argc, char** argv) try {
     set(lab_scenario_knobs[i], *lab_fields[i]);
   sim.validate();
   effects.validate();
+  const std::string calibration_text = self_calibrate < 0 ? std::string()
+                                                          : " Self-calibration: on, after " +
+                                                                std::to_string(self_calibrate) +
+                                                                " warm-up touches per sequence.";
   std::vector<std::optional<double>> tau_values;
   for (const double t : taus) {
     if (!(std::isfinite(t) && t > 0.0))
@@ -622,6 +632,8 @@ int main(int argc, char** argv) try {
     base.simulator = sim;
     base.scenario = effects;
     base.faults = faults;
+    base.self_calibrate = self_calibrate >= 0;
+    base.calibration_warmup = self_calibrate > 0 ? static_cast<std::size_t>(self_calibrate) : 0;
     if (kind == tacmap::measurement_kind::ncc) {
       for (const auto& t : tau_values) {
         auto c = base;
@@ -796,7 +808,8 @@ int main(int argc, char** argv) try {
           std::to_string(library_sequences) + " is not a number of sequences; expected N >= 1");
     std::fprintf(stderr, "scenario: %s, library of %zu objects\n", to_string(scenario),
                  objects.size());
-    std::printf("%s\n\n", conditions_text(to_string(scenario), sim, effects).c_str());
+    std::printf("%s%s\n\n", conditions_text(to_string(scenario), sim, effects).c_str(),
+                calibration_text.c_str());
     const bool ok = tacmap_tools::run_library_evaluation(
         objects, configs,
         library_sequences > 0 ? static_cast<std::size_t>(library_sequences) : all_sequences,
@@ -828,7 +841,8 @@ int main(int argc, char** argv) try {
   bool below_floor = false;
   std::map<std::string, confidence_tally> confidence;  // per configuration, over every map
   std::fprintf(stderr, "scenario: %s\n", to_string(scenario));
-  std::printf("%s\n\n", conditions_text(to_string(scenario), sim, effects).c_str());
+  std::printf("%s%s\n\n", conditions_text(to_string(scenario), sim, effects).c_str(),
+              calibration_text.c_str());
   std::printf(
       "| map | configuration | localized | median touches to localize | median final error mm | "
       "median final entropy nats | raised dark: localized | median final P(true appearance) | "
