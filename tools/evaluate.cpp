@@ -226,7 +226,7 @@ std::string conditions_text(const char* scenario, const tacmap::simulator_params
   const auto add = [](std::string& to, const char* name, double value, double off) {
     if (value == off) return;
     char buf[96];
-    std::snprintf(buf, sizeof buf, "%s%s %.3g", to.empty() ? "" : ", ", name, value);
+    std::snprintf(buf, sizeof buf, "%s%s %.4g", to.empty() ? "" : ", ", name, value);
     to += buf;
   };
   add(photo, "texture", e.albedo_variation, 0.0);
