@@ -1,5 +1,6 @@
 // tacmap's Python module: the small value types everything else passes around — the sensor's
-// geometry, a tactile frame, a device pose and the device -> map calibration.
+// geometry, a tactile frame, a burst of frames combined into one, a device pose and the device ->
+// map calibration.
 #include "bindings.hpp"
 // (bindings.hpp first: it defines TACMAP_ASSERT for the tacmap headers below.)
 
@@ -7,6 +8,7 @@
 #include <cstdint>
 
 #include "tacmap/devices/position_source.hpp"
+#include "tacmap/tactile/burst.hpp"
 #include "tacmap/tactile/frame.hpp"
 
 namespace tacmap::python {
@@ -149,6 +151,67 @@ void bind_core(py::module_& m) {
                ", sequence=" + std::to_string(f.sequence) + ", peak=" +
                number(f.counts.size() > 0 ? static_cast<double>(f.counts.maxCoeff()) : 0.0) + ")";
       });
+
+  // ---- combine_burst ----
+  py::class_<combined_burst>(m, "CombinedBurst",
+                             "A burst of frames of one press combined into one frame "
+                             "(combine_burst).")
+      .def_readonly("frame", &combined_burst::frame,
+                    "The combined Frame: the per-taxel statistic of the frames used.")
+      .def_property_readonly(
+          "status",
+          [](const combined_burst& b) {
+            std::vector<std::string> out;
+            for (const auto s : b.status) out.emplace_back(to_string(s));
+            return out;
+          },
+          "One string per frame of the burst, in order: 'used', 'settling' (before the press "
+          "settled) or 'outlier' (its total far from the settled level).")
+      .def_readonly("settled_total", &combined_burst::settled_total,
+                    "The settled level: median total counts of the burst's second half.")
+      .def_readonly("used", &combined_burst::used, "Frames combined (at least 1).")
+      .def("__repr__", [](const combined_burst& b) {
+        return "CombinedBurst(used=" + std::to_string(b.used) + " of " +
+               std::to_string(b.status.size()) +
+               " frames, settled_total=" + number(b.settled_total) + ")";
+      });
+  m.def(
+      "combine_burst",
+      [m](const py::sequence& frames, double settle_tolerance, double outlier_tolerance,
+          const std::string& statistic, double trim_fraction) {
+        burst_params p;
+        p.settle_tolerance = settle_tolerance;
+        p.outlier_tolerance = outlier_tolerance;
+        p.trim_fraction = trim_fraction;
+        if (statistic == "median")
+          p.statistic = burst_statistic::median;
+        else if (statistic == "trimmed_mean")
+          p.statistic = burst_statistic::trimmed_mean;
+        else
+          throw py::value_error("combine_burst: statistic = '" + statistic +
+                                "'; expected 'median' or 'trimmed_mean'");
+        std::vector<tactile_frame> burst;
+        burst.reserve(frames.size());
+        const py::object frame_type = m.attr("Frame");
+        for (const auto& item : frames) {
+          // A Frame, or anything Frame() takes (a 2-D array of counts).
+          const py::object f = py::isinstance(item, frame_type)
+                                   ? py::reinterpret_borrow<py::object>(item)
+                                   : frame_type(item);
+          burst.push_back(f.cast<const tactile_frame&>());
+        }
+        py::gil_scoped_release release;
+        return combine_burst(burst, p);
+      },
+      py::arg("frames"), py::arg("settle_tolerance") = burst_params{}.settle_tolerance,
+      py::arg("outlier_tolerance") = burst_params{}.outlier_tolerance,
+      py::arg("statistic") = "median", py::arg("trim_fraction") = burst_params{}.trim_fraction,
+      "Combines a burst of frames of one press (Frames or 2-D arrays of counts) into one "
+      "(C++ tacmap::combine_burst; tactile/burst.hpp): drops the settling head (frames before "
+      "the first whose total is within settle_tolerance of the settled level, the median total "
+      "of the burst's second half) and outlier frames (total off by more than "
+      "outlier_tolerance), then takes the per-taxel median or trimmed mean. Raises ValueError "
+      "for an empty burst or frames of different geometry (naming the frame).");
 
   // ---- Pose ----
   py::class_<sensor_pose>(m, "Pose",

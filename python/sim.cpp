@@ -138,6 +138,14 @@ void bind_simulation(py::module_& m) {
                      "Fraction of taxels that always read 0.")
       .def_readwrite("full_scale_counts", &simulator_params::full_scale_counts,
                      "Saturation value (12-bit read-out: 4095).")
+      .def_readwrite("saturation_counts", &simulator_params::saturation_counts,
+                     "Soft saturation level: counts = S tanh(counts / S) before the noise; 0 = "
+                     "linear up to full scale.")
+      .def_readwrite("hysteresis", &simulator_params::hysteresis,
+                     "Fraction of the previous frame's counts that persists into the next.")
+      .def_readwrite("baseline_drift_counts", &simulator_params::baseline_drift_counts,
+                     "Standard deviation of each frame's step of the taxels' baseline random "
+                     "walk, counts.")
       .def_readwrite("seed", &simulator_params::seed,
                      "Fixes gains, dead taxels and the noise stream.")
       .def_property(
@@ -152,8 +160,8 @@ void bind_simulation(py::module_& m) {
   keyword_struct<simulator_params>(
       sp,
       {"geometry", "press_depth_mm", "supersample", "foam_sigma_mm", "gain_counts_per_mm",
-       "gain_variation", "noise_counts", "dead_fraction", "full_scale_counts", "seed",
-       "frame_interval_ns"},
+       "gain_variation", "noise_counts", "dead_fraction", "full_scale_counts", "saturation_counts",
+       "hysteresis", "baseline_drift_counts", "seed", "frame_interval_ns"},
       "Configuration of the tactile simulator (C++ tacmap::simulator_params). The defaults "
       "describe the paper's Weiss array on a 4 mm relief: a 1 mm press gives about 2000 of "
       "4095 counts on a fully loaded cell, with a few percent of noise and gain spread.");
@@ -166,6 +174,15 @@ void bind_simulation(py::module_& m) {
       "The sensor of the realistic scenario: the paper's array after use, not a new one (40 "
       "counts of noise, 10 % gain spread, 2 of 84 taxels dead, a 2.5 mm foam spread). Starts "
       "from `base` (geometry, press depth, seed) and replaces the imperfections.");
+  m.def(
+      "harsh_sensor",
+      [](std::optional<simulator_params> base) {
+        return harsh_sensor(base.value_or(simulator_params{}));
+      },
+      py::arg("base") = py::none(),
+      "The sensor of the harsh scenario (issue 34; docs/simulator.md): 5 % of full scale noise, "
+      "+-30 % gains, 10 % dead taxels, a one-pitch pad spread, soft saturation at 3000 counts, "
+      "8 % hysteresis and a drifting baseline.");
 
   // ---- Simulator ----
   py::class_<tactile_simulator>(
@@ -283,6 +300,26 @@ void bind_simulation(py::module_& m) {
                      "degrees.")
       .def_readwrite("press_depth_jitter", &scenario_params::press_depth_jitter,
                      "Relative standard deviation of the press depth.")
+      .def_readwrite("shadow_depth", &scenario_params::shadow_depth,
+                     "Fraction of the light a cast shadow over 20-40 % of the map takes.")
+      .def_readwrite("shadow_edge_px", &scenario_params::shadow_edge_px,
+                     "The shadow's penumbra, map px (Gaussian sigma).")
+      .def_readwrite("defocus_px", &scenario_params::defocus_px,
+                     "Radius of the defocus disc, map px.")
+      .def_readwrite("map_scale_error", &scenario_params::map_scale_error,
+                     "Relative error of the map's scale (sign drawn per sequence).")
+      .def_readwrite("light_press_fraction", &scenario_params::light_press_fraction,
+                     "Fraction of presses that are light.")
+      .def_readwrite("light_press_scale", &scenario_params::light_press_scale,
+                     "Depth of a light press relative to the nominal one.")
+      .def_readwrite("partial_press_fraction", &scenario_params::partial_press_fraction,
+                     "Fraction of presses that land tilted (partial contact).")
+      .def_readwrite("partial_press_tilt_deg", &scenario_params::partial_press_tilt_deg,
+                     "Tilt of a partial press, degrees.")
+      .def_static("harsh", &scenario_params::harsh,
+                  "A lab's conditions (issue 34; docs/simulator.md): unknown_object(), plus a "
+                  "cast shadow, defocus, a stronger gradient, a 3 % map scale error, light and "
+                  "partial presses. Use it with harsh_sensor().")
       .def_static("realistic", &scenario_params::realistic,
                   "The scenario of the paper's setup (a webcam image of a matte print under a "
                   "desk lamp, ~1 mm / 1 degree registration, 3 degrees orientation jitter, 20 % "
@@ -299,11 +336,32 @@ void bind_simulation(py::module_& m) {
            "True when the sensor's pose or press departs from the protocol's.");
   keyword_struct<scenario_params>(
       sc,
-      {"albedo_variation", "albedo_scale_px", "illumination_gradient", "shading",
-       "light_elevation_deg", "camera_blur_px", "camera_noise", "camera_gamma", "ink_coverage",
-       "ink_contrast", "albedo_contrast", "polarity", "mixed_polarity", "registration_shift_mm",
-       "registration_rotation_deg", "orientation_jitter_deg", "tilt_jitter_deg",
-       "press_depth_jitter"},
+      {"albedo_variation",
+       "albedo_scale_px",
+       "illumination_gradient",
+       "shading",
+       "light_elevation_deg",
+       "camera_blur_px",
+       "camera_noise",
+       "camera_gamma",
+       "ink_coverage",
+       "ink_contrast",
+       "albedo_contrast",
+       "polarity",
+       "mixed_polarity",
+       "registration_shift_mm",
+       "registration_rotation_deg",
+       "orientation_jitter_deg",
+       "tilt_jitter_deg",
+       "press_depth_jitter",
+       "shadow_depth",
+       "shadow_edge_px",
+       "defocus_px",
+       "map_scale_error",
+       "light_press_fraction",
+       "light_press_scale",
+       "partial_press_fraction",
+       "partial_press_tilt_deg"},
       "Simulation scenario (C++ tacmap::scenario_params): how the camera's map, the object's "
       "relief and registration, and each press depart from the ideal. Every effect is off "
       "(ideal) by default; ScenarioParams.realistic() is the paper's setup and "

@@ -21,6 +21,12 @@
 // at random per sequence, regions of the opposite relation and printed ink. Every effect has
 // its own option, applied on top of the scenario (e.g. --scenario realistic --camera-gamma 1,
 // --polarity dark, --mixed-polarity 0.3, --ink-coverage 0.1, --albedo-contrast 0).
+// --scenario harsh is a lab's conditions (issue 34; docs/simulator.md argues every level): unknown,
+// plus a cast shadow, defocus, a stronger light gradient, a map scale 3 % off, light and partial
+// presses, and a worn sensor that drifts, saturates, spreads and remembers the last press. Those
+// conditions have their own options too (--shadow, --defocus, --map-scale-error, --light-presses,
+// --partial-presses, --drift, --saturation, --hysteresis; --foam-sigma is the pad's spread), and
+// the tables are preceded by a line naming every condition in effect.
 //
 //   tacmap-evaluate --photo camera.png --model sift_lite,ncc --output eval.csv
 //   tacmap-evaluate --scenario realistic --model ncc --tau 0.05,0.1,0.2
@@ -212,6 +218,52 @@ void print_confidence(const std::map<std::string, confidence_tally>& tallies,
   }
 }
 
+// The conditions a run was made under, one line above its tables (issue 34: every condition in
+// the tables): the scenario's name, then each effect that is on, grouped as photograph, sensor
+// and contact.
+std::string conditions_text(const char* scenario, const tacmap::simulator_params& sim,
+                            const tacmap::scenario_params& e) {
+  std::string photo, sensor, contact;
+  const auto add = [](std::string& to, const char* name, double value, double off) {
+    if (value == off) return;
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%s%s %.4g", to.empty() ? "" : ", ", name, value);
+    to += buf;
+  };
+  add(photo, "texture", e.albedo_variation, 0.0);
+  add(photo, "light gradient", e.illumination_gradient, 0.0);
+  add(photo, "shading", e.shading, 0.0);
+  add(photo, "shadow", e.shadow_depth, 0.0);
+  add(photo, "blur px", e.camera_blur_px, 0.0);
+  add(photo, "defocus px", e.defocus_px, 0.0);
+  add(photo, "noise", e.camera_noise, 0.0);
+  add(photo, "gamma", e.camera_gamma, 1.0);
+  add(photo, "ink", e.ink_coverage, 0.0);
+  add(photo, "albedo contrast", e.albedo_contrast, 1.0);
+  add(photo, "mixed polarity", e.mixed_polarity, 0.0);
+  add(photo, "scale error", e.map_scale_error, 0.0);
+  add(photo, "registration mm", e.registration_shift_mm, 0.0);
+  add(photo, "registration deg", e.registration_rotation_deg, 0.0);
+  add(sensor, "noise counts", sim.noise_counts, 0.0);
+  add(sensor, "gain spread", sim.gain_variation, 0.0);
+  add(sensor, "dead", sim.dead_fraction, 0.0);
+  add(sensor, "pad spread mm", sim.foam_sigma_mm, 0.0);
+  add(sensor, "drift counts", sim.baseline_drift_counts, 0.0);
+  add(sensor, "saturation counts", sim.saturation_counts, 0.0);
+  add(sensor, "hysteresis", sim.hysteresis, 0.0);
+  add(contact, "depth mm", sim.press_depth_mm, -1.0);
+  add(contact, "depth jitter", e.press_depth_jitter, 0.0);
+  add(contact, "orientation jitter deg", e.orientation_jitter_deg, 0.0);
+  add(contact, "tilt jitter deg", e.tilt_jitter_deg, 0.0);
+  add(contact, "light presses", e.light_press_fraction, 0.0);
+  if (e.light_press_fraction > 0.0) add(contact, "at depth x", e.light_press_scale, -1.0);
+  add(contact, "partial presses", e.partial_press_fraction, 0.0);
+  if (e.partial_press_fraction > 0.0) add(contact, "tilted deg", e.partial_press_tilt_deg, -1.0);
+  return std::string("Conditions (scenario ") + scenario + ", polarity " +
+         tacmap::to_string(e.polarity) + "): photograph: " + (photo.empty() ? "clean" : photo) +
+         "; sensor: " + (sensor.empty() ? "ideal" : sensor) + "; contact: " + contact + ".";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
@@ -255,6 +307,43 @@ int main(int argc, char** argv) try {
       {"--press-depth", "indentation of the highest point, mm", 0.0, 100.0, {}},
       {"--foam-sigma", "load spread by the foam cover, mm", 0.0, 100.0, {}},
   };
+  // The lab's conditions (issue 34): their own list, so the older knobs keep their order.
+  std::vector<knob> lab_sensor_knobs{
+      {"--drift",
+       "sensor: per-frame std of the taxels' baseline random walk, counts",
+       0.0,
+       4095.0,
+       {}},
+      {"--saturation", "sensor: soft saturation level, counts (0 = linear)", 0.0, 1e6, {}},
+      {"--hysteresis", "sensor: fraction of the previous frame that persists", 0.0, 0.99, {}},
+  };
+  std::vector<knob> lab_scenario_knobs{
+      {"--shadow",
+       "camera map: fraction of the light a cast shadow takes (0 = none)",
+       0.0,
+       1.0,
+       {}},
+      {"--shadow-edge", "camera map: the shadow's penumbra, map px", 0.0, 100.0, {}},
+      {"--defocus", "camera map: defocus disc radius, map px", 0.0, 50.0, {}},
+      {"--map-scale-error",
+       "the map's scale is off by this fraction (sign per sequence)",
+       0.0,
+       0.3,
+       {}},
+      {"--light-presses", "contact: fraction of presses that are light", 0.0, 1.0, {}},
+      {"--light-press-scale",
+       "contact: depth of a light press, fraction of the nominal",
+       0.0,
+       1.0,
+       {}},
+      {"--partial-presses",
+       "contact: fraction of presses that land tilted (partial contact)",
+       0.0,
+       1.0,
+       {}},
+      {"--partial-press-tilt", "contact: tilt of a partial press, degrees", 0.0, 20.0, {}},
+  };
+  long long self_calibrate = -1;  // -1: off; N >= 0: on, after N warm-up touches
   std::vector<knob> scenario_knobs{
       {"--albedo-variation",
        "camera map: relative std of the print's surface texture",
@@ -420,15 +509,21 @@ int main(int argc, char** argv) try {
   app.add_flag("--quiet,-q", quiet, "no progress bar (it is drawn only when stderr is a terminal)");
   app.add_option("--scenario", scenario_name,
                  "ideal (the map's own image, a new sensor), realistic (camera map, "
-                 "misregistration, press jitter, worn sensor; sim/scenario.hpp) or unknown "
-                 "(realistic, plus random polarity, mixed polarity and printed ink)");
+                 "misregistration, press jitter, worn sensor; sim/scenario.hpp), unknown "
+                 "(realistic, plus random polarity, mixed polarity and printed ink) or harsh "
+                 "(unknown, plus a lab's conditions: docs/simulator.md)");
   app.add_option("--polarity", polarity_name,
                  "relief: raised parts bright, dark, or random (drawn per sequence) "
                  "(default: the scenario's)");
-  for (auto* knobs : {&sensor_knobs, &scenario_knobs})
+  for (auto* knobs : {&sensor_knobs, &scenario_knobs, &lab_sensor_knobs, &lab_scenario_knobs})
     for (auto& k : *knobs)
       app.add_option(k.flag, k.value, std::string(k.help) + " (default: the scenario's)")
           ->check(CLI::Range(k.lo, k.hi));
+  app.add_option("--self-calibrate", self_calibrate,
+                 "correct every frame by a self_calibration of the sensor "
+                 "(tactile/self_calibration.hpp) that has seen N touches at random poses before "
+                 "each sequence (e.g. 56; 0 = only the sequence's own); default: off")
+      ->check(CLI::Range(0LL, 100000LL));
   app.footer(tacmap_tools::exit_status_footer);
   if (const auto status = tacmap_tools::parse(app, argc, argv)) return *status;
   // The progress bar redraws one line with carriage returns: on a terminal only, never into
@@ -456,7 +551,8 @@ int main(int argc, char** argv) try {
       parse_choice<tacmap::scenario_kind>("--scenario", scenario_name,
                                           {{"ideal", tacmap::scenario_kind::ideal},
                                            {"realistic", tacmap::scenario_kind::realistic},
-                                           {"unknown", tacmap::scenario_kind::unknown}});
+                                           {"unknown", tacmap::scenario_kind::unknown},
+                                           {"harsh", tacmap::scenario_kind::harsh}});
   tacmap::simulator_params sim;  // the simulated sensor's physics (defaults: the paper's array)
   tacmap::scenario_params effects;
   if (scenario == tacmap::scenario_kind::realistic) {
@@ -465,6 +561,9 @@ int main(int argc, char** argv) try {
   } else if (scenario == tacmap::scenario_kind::unknown) {
     sim = tacmap::realistic_sensor(sim);
     effects = tacmap::scenario_params::unknown_object();
+  } else if (scenario == tacmap::scenario_kind::harsh) {
+    sim = tacmap::harsh_sensor(sim);
+    effects = tacmap::scenario_params::harsh();
   }
   if (!polarity_name.empty())
     effects.polarity = parse_choice<tacmap::relief_polarity>(
@@ -493,8 +592,22 @@ int main(int argc, char** argv) try {
                             &effects.mixed_polarity};
   static_assert(std::size(fields) == 17);
   for (std::size_t i = 0; i < std::size(fields); ++i) set(scenario_knobs[i], *fields[i]);
+  set(lab_sensor_knobs[0], sim.baseline_drift_counts);
+  set(lab_sensor_knobs[1], sim.saturation_counts);
+  set(lab_sensor_knobs[2], sim.hysteresis);
+  double* const lab_fields[] = {
+      &effects.shadow_depth,           &effects.shadow_edge_px,        &effects.defocus_px,
+      &effects.map_scale_error,        &effects.light_press_fraction,  &effects.light_press_scale,
+      &effects.partial_press_fraction, &effects.partial_press_tilt_deg};
+  static_assert(std::size(lab_fields) == 8);
+  for (std::size_t i = 0; i < std::size(lab_fields); ++i)
+    set(lab_scenario_knobs[i], *lab_fields[i]);
   sim.validate();
   effects.validate();
+  const std::string calibration_text = self_calibrate < 0 ? std::string()
+                                                          : " Self-calibration: on, after " +
+                                                                std::to_string(self_calibrate) +
+                                                                " warm-up touches per sequence.";
   std::vector<std::optional<double>> tau_values;
   for (const double t : taus) {
     if (!(std::isfinite(t) && t > 0.0))
@@ -523,6 +636,8 @@ int main(int argc, char** argv) try {
     base.simulator = sim;
     base.scenario = effects;
     base.faults = faults;
+    base.self_calibrate = self_calibrate >= 0;
+    base.calibration_warmup = self_calibrate > 0 ? static_cast<std::size_t>(self_calibrate) : 0;
     if (kind == tacmap::measurement_kind::ncc) {
       for (const auto& t : tau_values) {
         auto c = base;
@@ -697,6 +812,8 @@ int main(int argc, char** argv) try {
           std::to_string(library_sequences) + " is not a number of sequences; expected N >= 1");
     std::fprintf(stderr, "scenario: %s, library of %zu objects\n", to_string(scenario),
                  objects.size());
+    std::printf("%s%s\n\n", conditions_text(to_string(scenario), sim, effects).c_str(),
+                calibration_text.c_str());
     const bool ok = tacmap_tools::run_library_evaluation(
         objects, configs,
         library_sequences > 0 ? static_cast<std::size_t>(library_sequences) : all_sequences,
@@ -728,6 +845,8 @@ int main(int argc, char** argv) try {
   bool below_floor = false;
   std::map<std::string, confidence_tally> confidence;  // per configuration, over every map
   std::fprintf(stderr, "scenario: %s\n", to_string(scenario));
+  std::printf("%s%s\n\n", conditions_text(to_string(scenario), sim, effects).c_str(),
+              calibration_text.c_str());
   std::printf(
       "| map | configuration | localized | median touches to localize | median final error mm | "
       "median final entropy nats | raised dark: localized | median final P(true appearance) | "

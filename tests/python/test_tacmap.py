@@ -648,5 +648,43 @@ class TestDocumentation(unittest.TestCase):
         self.assertEqual(every.confidence.radius_mm, 3.0)
 
 
+class TestBurst(unittest.TestCase):
+    """combine_burst: several frames of one press combined robustly (tactile/burst.hpp)."""
+
+    @staticmethod
+    def blob(scale=1.0):
+        r, c = np.mgrid[0:14, 0:6]
+        return scale * 2000.0 * np.exp(-0.5 * (((r - 6) / 3.0) ** 2 + ((c - 2.5) / 1.5) ** 2))
+
+    def test_settling_head_and_outliers_are_dropped(self):
+        rng = np.random.default_rng(1)
+        scales = [0.3, 0.7, 1.0, 1.0, 1.0, 1.6, 1.0, 1.0, 1.0, 1.0]
+        frames = [tacmap.Frame(np.clip(self.blob(s) + rng.normal(0, 10, (14, 6)), 0, None))
+                  for s in scales]
+        out = tacmap.combine_burst(frames)
+        self.assertEqual(out.status[:3], ["settling", "settling", "used"])
+        self.assertEqual(out.status[5], "outlier")
+        self.assertEqual(out.used, 7)
+        self.assertLess(np.abs(np.asarray(out.frame) - self.blob()).max(), 30.0)
+        self.assertAlmostEqual(out.settled_total / self.blob().sum(), 1.0, delta=0.02)
+        self.assertIn("used=7 of 10", repr(out))
+        # Plain arrays are taken too; the trimmed mean is the other statistic.
+        arrays = [np.asarray(f) for f in frames]
+        same = tacmap.combine_burst(arrays, statistic="trimmed_mean", trim_fraction=0.0)
+        self.assertEqual(same.status, out.status)
+        kept = [a for a, s in zip(arrays, out.status) if s == "used"]
+        np.testing.assert_allclose(np.asarray(same.frame), np.mean(kept, axis=0), rtol=1e-5)
+
+    def test_bad_bursts_are_refused(self):
+        with self.assertRaisesRegex(ValueError, "the burst has no frames"):
+            tacmap.combine_burst([])
+        with self.assertRaisesRegex(ValueError, "frame 1 of 2 has geometry 10 x 4"):
+            tacmap.combine_burst([tacmap.Frame(self.blob()), tacmap.Frame(np.ones((10, 4)))])
+        with self.assertRaisesRegex(ValueError, "statistic = 'mean'"):
+            tacmap.combine_burst([self.blob()], statistic="mean")
+        with self.assertRaisesRegex(ValueError, "outlier_tolerance"):
+            tacmap.combine_burst([self.blob()], settle_tolerance=0.5, outlier_tolerance=0.1)
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -62,6 +62,7 @@
 #include "tacmap/sim/scenario.hpp"
 #include "tacmap/sim/tactile_simulator.hpp"
 #include "tacmap/tactile/preprocess.hpp"
+#include "tacmap/tactile/self_calibration.hpp"
 
 namespace tacmap {
 
@@ -78,6 +79,14 @@ struct localization_config : localizer_config {
   /// Each sequence's sensor heading drawn uniformly from [-pi, pi) (its own stream of the
   /// simulator seed) instead of 0; the odometry is then reported in the sensor's frame.
   bool random_orientation = false;
+  /// Self-calibration of the sensor (tactile/self_calibration.hpp): every frame is observed by a
+  /// `self_calibration` and corrected by it before preprocessing. Off by default.
+  bool self_calibrate = false;
+  self_calibration_params calibration{};
+  /// Touches the sensor made before the sequence (at random poses on the object, observed by
+  /// the calibration, not localized): a sensor in use has a history, a 7-touch sequence alone
+  /// is too short to estimate 84 taxels. Used only with `self_calibrate`.
+  std::size_t calibration_warmup = 0;
 
   /// Throws std::invalid_argument for settings that contradict each other, naming both.
   void validate() const {
@@ -373,13 +382,22 @@ class localization_experiment {
     sp.seed = splitmix64(s);
     // The relief pressed on, padded (edge heights continued) when the scenario moves the
     // sensor, so that a shifted or turned footprint near the map's border still lies on it.
-    const double offset_mm = static_cast<double>(margin_px_) * protocol_->mm_per_px;
+    const scenario_params& sc = config_.scenario;
+    // The lab's conditions (issue 34) draw from their own stream, so that the other draws stay
+    // as they were: the map's scale error this sequence, then light and partial presses.
+    sim_rng condition_rng(scenario_seed(config_.simulator_seed ^ 0x632BE59BD9B4E019ULL, index));
+    // The object is `scale` times the size the map says: the simulator presses it at its true
+    // scale (same pixels, larger mm), at the physical position of the map's point.
+    const double scale =
+        sc.map_scale_error > 0.0
+            ? 1.0 + (condition_rng.uniform() < 0.5 ? -1.0 : 1.0) * sc.map_scale_error
+            : 1.0;
+    const double offset_mm = static_cast<double>(margin_px_) * protocol_->mm_per_px * scale;
     tactile_simulator simulator(v.pressed_relief,
                                 {protocol_->map_size().width + 2 * margin_px_,
                                  protocol_->map_size().height + 2 * margin_px_},
-                                protocol_->mm_per_px, sp);
+                                protocol_->mm_per_px * scale, sp);
     // Registration error of this sequence and the stream of per-press variations.
-    const scenario_params& sc = config_.scenario;
     sim_rng scenario_rng(scenario_seed(config_.simulator_seed, index + 1));
     const double pi = std::numbers::pi;
     const double shift_angle = 2.0 * pi * scenario_rng.uniform();
@@ -405,13 +423,35 @@ class localization_experiment {
                      planar_grid<float>(protocol_->map_size(), protocol_->mm_per_px, window_),
                      config_.faults, fault_rng);
 
+    std::optional<self_calibration> calibration;
+    if (config_.self_calibrate) {
+      calibration.emplace(sp.geometry, config_.calibration);
+      // The sensor's history: presses at random poses on the object, their own stream.
+      sim_rng warmup_rng(scenario_seed(config_.simulator_seed ^ 0x1D8E4E27C47D124FULL, index));
+      const double w = static_cast<double>(protocol_->map_size().width) * protocol_->mm_per_px;
+      const double h = static_cast<double>(protocol_->map_size().height) * protocol_->mm_per_px;
+      const double hu = 0.5 * static_cast<double>(sp.geometry.cols) * sp.geometry.pitch_mm;
+      const double hv = 0.5 * static_cast<double>(sp.geometry.rows) * sp.geometry.pitch_mm;
+      for (std::size_t k = 0; k < config_.calibration_warmup; ++k) {
+        map_pose at{hu + (w - 2.0 * hu) * warmup_rng.uniform(),
+                    hv + (h - 2.0 * hv) * warmup_rng.uniform(), heading};
+        at.x_mm = at.x_mm * scale + offset_mm;
+        at.y_mm = at.y_mm * scale + offset_mm;
+        if (simulator.fits(at)) calibration->observe(simulator.render(at));
+      }
+    }
+
     filter.reset();
     sequence_result result;
     result.sequence = index;
     for (std::size_t step = 0; step < sequence.size(); ++step) {
       const protocol_step& st = sequence[step];
       const touch_location& truth = faulted.truth[step];
-      const odometry& reported = faulted.reported[step];
+      odometry reported = faulted.reported[step];
+      if (scale != 1.0) {  // the arm measures mm of the object; the map's mm are off by scale
+        reported.dx_mm *= scale;
+        reported.dy_mm *= scale;
+      }
       bool lost_track = false;
       if (step > 0) {
         try {
@@ -457,10 +497,27 @@ class localization_experiment {
         press.tilt_u_rad = std::clamp(sc.tilt_jitter_deg * pi / 180.0 * tilt_u, -0.4, 0.4);
         press.tilt_v_rad = std::clamp(sc.tilt_jitter_deg * pi / 180.0 * tilt_v, -0.4, 0.4);
         press.depth_scale = std::max(0.2, 1.0 + sc.press_depth_jitter * depth);
+        // Light and partial presses (drawn whatever their fractions, from their own stream).
+        const double light = condition_rng.uniform(), partial = condition_rng.uniform(),
+                     axis = 2.0 * pi * condition_rng.uniform();
+        if (light < sc.light_press_fraction) press.depth_scale *= sc.light_press_scale;
+        if (partial < sc.partial_press_fraction) {
+          const double t = sc.partial_press_tilt_deg * pi / 180.0;
+          press.tilt_u_rad = std::clamp(press.tilt_u_rad + t * std::cos(axis), -0.45, 0.45);
+          press.tilt_v_rad = std::clamp(press.tilt_v_rad + t * std::sin(axis), -0.45, 0.45);
+        }
+        if (scale != 1.0) {
+          pressed.x_mm *= scale;
+          pressed.y_mm *= scale;
+        }
       }
       pressed.x_mm += offset_mm;
       pressed.y_mm += offset_mm;
       tactile_frame frame = simulator.render(pressed, press);
+      if (calibration) {
+        calibration->observe(frame);
+        frame = calibration->correct(frame).frame;
+      }
       const preprocessed_frame pre = preprocess(frame, config_.preprocessing);
       touch_record rec;
       rec.step = step;
@@ -539,7 +596,9 @@ class localization_experiment {
     const double mm =
         c.scenario.registration_shift_mm +
         std::hypot(w, h) * c.scenario.registration_rotation_deg * std::numbers::pi / 180.0 +
-        (half_diagonal - half_short) + 2.0 * p.mm_per_px;
+        (half_diagonal - half_short) + 2.0 * p.mm_per_px +
+        // A map scale off by e: the footprint covers up to 1 / (1 - e) of its pixels.
+        half_diagonal * c.scenario.map_scale_error / (1.0 - c.scenario.map_scale_error);
     return static_cast<Eigen::Index>(std::ceil(mm / p.mm_per_px));
   }
 

@@ -104,6 +104,22 @@ struct scenario_params {
   /// albedo = mean + albedo_contrast x (image - mean). 0 = an object of one colour, whose
   /// relief shows in the photo only through shading.
   double albedo_contrast = 1.0;
+  /// A cast shadow (the arm, the camera, a lamp's shade) over part of the map: the light
+  /// falling there is reduced by this fraction. The shadow's straight edge crosses the map in
+  /// a direction drawn from the seed and it covers 20-40 % of the map. 0 = no shadow.
+  double shadow_depth = 0.0;
+  /// Width of the shadow's penumbra, map pixels (Gaussian sigma of its edge).
+  double shadow_edge_px = 3.0;
+  /// Defocus: the camera focused off the object's face blurs with a disc (circle of confusion)
+  /// of this radius, map pixels, on top of `camera_blur_px`'s Gaussian. 0 = in focus.
+  double defocus_px = 0.0;
+
+  // --- The map's scale (drawn once per sequence) ---
+  /// Relative error of the map's scale: the object is (1 +- map_scale_error) times the size
+  /// the map's mm_per_px says (sign drawn per sequence). The sensor then covers 1 / (1 +- e) of
+  /// the map pixels it should, and the arm's odometry, exact in mm, is off by e of every move
+  /// in the map's units. 0 = the scale is exact.
+  double map_scale_error = 0.0;
 
   // --- How the relief relates to the photo's brightness (object_relief) ---
   /// Whether raised parts are brighter or darker than their surroundings, or either per
@@ -126,6 +142,18 @@ struct scenario_params {
   double tilt_jitter_deg = 0.0;
   /// Relative standard deviation of the press depth (force varies from press to press).
   double press_depth_jitter = 0.0;
+  /// Fraction of presses that are light: the array only brushes the relief, at
+  /// `light_press_scale` of the press depth (a cautious controller, a soft object).
+  double light_press_fraction = 0.0;
+  /// Depth of a light press relative to the nominal one.
+  double light_press_scale = 0.3;
+  /// Fraction of presses that are partial: the array lands tilted by `partial_press_tilt_deg`
+  /// about a random in-plane axis, so only part of it meets the relief (the edge of an object,
+  /// a wrist that does not comply).
+  double partial_press_fraction = 0.0;
+  /// Tilt of a partial press, degrees (2 degrees over the 47.6 mm array is 1.7 mm: with the
+  /// 1 mm press, about a third of the array stays off the surface).
+  double partial_press_tilt_deg = 2.0;
 
   /// The scenario of the paper's setup; each value is argued in its comment.
   [[nodiscard]] static scenario_params realistic() {
@@ -187,11 +215,38 @@ struct scenario_params {
     return s;
   }
 
+  /// The conditions a lab has (issue 34): everything of `unknown_object()`, a worse camera (a
+  /// cast shadow, defocus, a stronger gradient), a map scale known to a few percent, light and
+  /// partial presses. Use with `harsh_sensor()`. Every value is argued in docs/simulator.md.
+  [[nodiscard]] static scenario_params harsh() {
+    scenario_params s = unknown_object();
+    // A bench lamp to one side plus vignetting: 40 % across the map (the realistic 20 % is a
+    // well-lit desk).
+    s.illumination_gradient = 0.4;
+    // The arm or the camera itself shades part of the object: a shadow taking 40 % of the
+    // light (an ambient-lit shadow in a room is 30-60 % darker).
+    s.shadow_depth = 0.4;
+    s.shadow_edge_px = 3.0;
+    // A webcam at 30-50 cm with fixed focus, object a few cm off the focal plane: a circle of
+    // confusion of about 1.5 map px (1.7 mm) radius.
+    s.defocus_px = 1.5;
+    // The map's scale from a ruler in the picture or the camera's calibration at an assumed
+    // distance: 3 % (1.5 cm of a 50 cm working distance).
+    s.map_scale_error = 0.03;
+    // A position-controlled press on an unknown object: one press in five barely touches
+    // (30 % of the depth), one in five lands tilted by 2 degrees.
+    s.light_press_fraction = 0.2;
+    s.light_press_scale = 0.3;
+    s.partial_press_fraction = 0.2;
+    s.partial_press_tilt_deg = 2.0;
+    return s;
+  }
+
   /// True when some camera effect is on (the map differs from the protocol's image).
   [[nodiscard]] bool changes_map() const {
     return albedo_variation > 0.0 || illumination_gradient > 0.0 || shading > 0.0 ||
            camera_blur_px > 0.0 || camera_noise > 0.0 || camera_gamma != 1.0 ||
-           ink_coverage > 0.0 || albedo_contrast != 1.0;
+           ink_coverage > 0.0 || albedo_contrast != 1.0 || shadow_depth > 0.0 || defocus_px > 0.0;
   }
   /// True when the relief pressed may differ from the protocol's (`relief_from_image` of the
   /// map): raised parts darker (always or per sequence), or mixed-polarity regions.
@@ -201,7 +256,8 @@ struct scenario_params {
   /// True when the sensor's pose or press departs from the protocol's.
   [[nodiscard]] bool moves_sensor() const {
     return registration_shift_mm > 0.0 || registration_rotation_deg > 0.0 ||
-           orientation_jitter_deg > 0.0 || tilt_jitter_deg > 0.0 || press_depth_jitter > 0.0;
+           orientation_jitter_deg > 0.0 || tilt_jitter_deg > 0.0 || press_depth_jitter > 0.0 ||
+           map_scale_error > 0.0 || light_press_fraction > 0.0 || partial_press_fraction > 0.0;
   }
 
   void validate() const {
@@ -236,6 +292,18 @@ struct scenario_params {
     in("tilt_jitter_deg", tilt_jitter_deg, 0.0, 5.0, " degrees (standard deviation)");
     in("press_depth_jitter", press_depth_jitter, 0.0, 1.0,
        " (relative standard deviation, e.g. 0.2)");
+    in("shadow_depth", shadow_depth, 0.0, 1.0,
+       " (fraction of the light the shadow takes; 0 = no shadow)");
+    in("shadow_edge_px", shadow_edge_px, 0.0, 100.0, " map pixels (Gaussian sigma of the edge)");
+    in("defocus_px", defocus_px, 0.0, 50.0, " map pixels (radius of the defocus disc)");
+    in("map_scale_error", map_scale_error, 0.0, 0.3,
+       " (relative error of the map's scale, e.g. 0.03 for 3 %)");
+    in("light_press_fraction", light_press_fraction, 0.0, 1.0, " (fraction of presses)");
+    in("light_press_scale", light_press_scale, 0.0, 1.0,
+       " (depth of a light press relative to the nominal one)");
+    in("partial_press_fraction", partial_press_fraction, 0.0, 1.0, " (fraction of presses)");
+    in("partial_press_tilt_deg", partial_press_tilt_deg, 0.0, 20.0,
+       " degrees (tilt of a partial press)");
   }
 };
 
@@ -254,11 +322,37 @@ struct scenario_params {
   return base;
 }
 
+/// The sensor of the harsh scenario (issue 34): a worn array in a lab that is not climate
+/// controlled. Starts from `base` and replaces the imperfections; each level is argued in
+/// docs/simulator.md.
+[[nodiscard]] inline simulator_params harsh_sensor(simulator_params base = {}) {
+  base = realistic_sensor(base);
+  // 5 % of full scale noise (200 of 4095): a worn cell under a compressed foam.
+  base.noise_counts = 200.0;
+  // Uncalibrated resistive cells after use: +-30 % (a standard deviation of 15 %).
+  base.gain_variation = 0.15;
+  // 10 % dead cells: 8 of 84, an array with a torn trace or a delaminated corner.
+  base.dead_fraction = 0.1;
+  // The foam cover spreads a point load over one pitch.
+  base.foam_sigma_mm = 3.4;
+  // The resistive response flattens well below the ADC's 4095: the DSA pads of the Schunk hand
+  // top out near 3500 counts; the curve bends from about 3000.
+  base.saturation_counts = 3000.0;
+  // Piezoresistive foam keeps 5-10 % of a press after release (FSR hysteresis is 10-20 % of
+  // full scale): 8 % of the previous frame persists.
+  base.hysteresis = 0.08;
+  // Baseline drift with temperature and creep: a standard deviation of 20 counts (0.5 % of
+  // full scale) per frame, a random walk that reaches ~60 counts over ten touches.
+  base.baseline_drift_counts = 20.0;
+  return base;
+}
+
 /// The named scenarios of tacmap-evaluate's --scenario.
 enum class scenario_kind {
   ideal,      ///< "ideal": scenario_params{}, the paper's sensor new
   realistic,  ///< "realistic": scenario_params::realistic(), realistic_sensor()
   unknown,    ///< "unknown": scenario_params::unknown_object(), realistic_sensor()
+  harsh,      ///< "harsh": scenario_params::harsh(), harsh_sensor() (issue 34)
 };
 
 [[nodiscard]] inline const char* to_string(scenario_kind k) {
@@ -269,6 +363,8 @@ enum class scenario_kind {
       return "realistic";
     case scenario_kind::unknown:
       return "unknown";
+    case scenario_kind::harsh:
+      return "harsh";
   }
   return "?";
 }
@@ -360,6 +456,59 @@ inline image<float> ink_layer(Eigen::Index rows, Eigen::Index cols, double cover
   return ink;
 }
 
+/// Where a cast shadow falls: per pixel in [0, 1] (1 = fully in the shadow). A straight edge
+/// in a direction drawn from `rng`, placed so that 20-40 % of the map (also drawn) lies beyond
+/// it, softened by a Gaussian penumbra of `edge_px`.
+inline image<float> shadow_weight(Eigen::Index rows, Eigen::Index cols, double edge_px,
+                                  sim_rng& rng) {
+  const double angle = 2.0 * std::numbers::pi * rng.uniform();
+  const double coverage = 0.2 + 0.2 * rng.uniform();
+  image<double> along(rows, cols);
+  for (Eigen::Index r = 0; r < rows; ++r)
+    for (Eigen::Index c = 0; c < cols; ++c)
+      along(r, c) =
+          static_cast<double>(c) * std::cos(angle) + static_cast<double>(r) * std::sin(angle);
+  std::vector<double> sorted(along.data(), along.data() + along.size());
+  if (sorted.empty()) return image<float>(rows, cols);
+  const auto kth = static_cast<std::ptrdiff_t>(
+      std::llround((1.0 - coverage) * static_cast<double>(sorted.size() - 1)));
+  std::nth_element(sorted.begin(), sorted.begin() + kth, sorted.end());
+  const double edge = sorted[static_cast<std::size_t>(kth)];
+  image<float> w(rows, cols);
+  for (Eigen::Index i = 0; i < w.size(); ++i) {
+    const double d = along.data()[i] - edge;
+    w.data()[i] = edge_px > 0.0
+                      ? static_cast<float>(0.5 * std::erfc(-d / (edge_px * std::sqrt(2.0))))
+                      : (d > 0.0 ? 1.0F : 0.0F);
+  }
+  return w;
+}
+
+/// Disc (pillbox) blur of radius `radius` pixels in place: a defocused lens's circle of
+/// confusion. Taps falling outside the image are dropped and the rest renormalised, as
+/// `gaussian_blur`. Radius 0 leaves the image as it is.
+inline void disc_blur(image<float>& values, double radius) {
+  if (!(radius > 0.0)) return;
+  const auto reach = static_cast<Eigen::Index>(std::floor(radius));
+  std::vector<std::pair<Eigen::Index, Eigen::Index>> taps;
+  for (Eigen::Index dy = -reach; dy <= reach; ++dy)
+    for (Eigen::Index dx = -reach; dx <= reach; ++dx)
+      if (static_cast<double>(dx * dx + dy * dy) <= radius * radius) taps.emplace_back(dy, dx);
+  const image<float> in = values;
+  for (Eigen::Index r = 0; r < in.rows(); ++r)
+    for (Eigen::Index c = 0; c < in.cols(); ++c) {
+      double sum = 0.0;
+      double n = 0.0;
+      for (const auto& [dy, dx] : taps) {
+        const Eigen::Index rr = r + dy, cc = c + dx;
+        if (rr < 0 || rr >= in.rows() || cc < 0 || cc >= in.cols()) continue;
+        sum += static_cast<double>(in(rr, cc));
+        n += 1.0;
+      }
+      values(r, c) = static_cast<float>(sum / n);
+    }
+}
+
 }  // namespace detail::simulation
 
 /// The object's height (mm) for a photo `map` (intensities in [0, 1]) under `relief` (how
@@ -419,6 +568,7 @@ inline image<float> ink_layer(Eigen::Index rows, Eigen::Index cols, double cover
   sim_rng light_rng(splitmix64(s));
   sim_rng noise_rng(splitmix64(s));
   sim_rng ink_rng(splitmix64(s));  // drawn after the others: their streams stay as they were
+  sim_rng shadow_rng(splitmix64(s));
   const Eigen::Index rows = map.rows();
   const Eigen::Index cols = map.cols();
 
@@ -477,7 +627,14 @@ inline image<float> ink_layer(Eigen::Index rows, Eigen::Index cols, double cover
       const double shade = (1.0 - params.shading) + params.shading * std::max(0.0, n_dot_l) / lz;
       out(r, c) = static_cast<float>(albedo * illumination * shade);
     }
+  if (params.shadow_depth > 0.0)
+    out = (out.cast<double>() *
+           (1.0 - params.shadow_depth * detail::simulation::shadow_weight(
+                                            rows, cols, params.shadow_edge_px, shadow_rng)
+                                            .cast<double>()))
+              .cast<float>();
   detail::simulation::gaussian_blur(out, params.camera_blur_px);
+  detail::simulation::disc_blur(out, params.defocus_px);
   for (Eigen::Index i = 0; i < out.size(); ++i) {
     const double linear = std::clamp(
         static_cast<double>(out.data()[i]) + params.camera_noise * noise_rng.normal(), 0.0, 1.0);

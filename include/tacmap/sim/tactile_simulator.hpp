@@ -24,6 +24,13 @@
 //     read exactly 0 (a resistive cell does not conduct without pressure). Values are rounded to
 //     integers and saturate at `full_scale_counts` (4095 for the 12-bit Weiss read-out). Dead
 //     taxels (`dead_fraction` of them, chosen once from the seed) always read 0.
+//  6. What a lab's sensor adds (issue 34; all off by default, docs/simulator.md argues the
+//     levels): `hysteresis` — a fraction of the previous frame's counts persists into this one
+//     (the foam and the resistive layer recover slowly after a press); `saturation_counts` —
+//     the resistive response compresses towards a ceiling, counts = S tanh(counts / S), before
+//     the noise; `baseline_drift_counts` — every taxel's zero wanders as a random walk from
+//     frame to frame (half of each step common to the array, as temperature moves it, half the
+//     taxel's own), and is added to every live taxel, loaded or not.
 //
 // Frames: a frame is `geometry.rows` x `geometry.cols` counts; taxel (r, c) sits at offset
 // ((c - (cols - 1) / 2) pitch, (r - (rows - 1) / 2) pitch) from the sensor centre in the sensor's
@@ -202,7 +209,16 @@ struct simulator_params {
   double noise_counts = 10.0;          ///< standard deviation of the read-out noise, counts
   double dead_fraction = 0.0;          ///< fraction of taxels that always read 0
   float full_scale_counts = 4095.0F;   ///< saturation value (12-bit read-out)
-  std::uint64_t seed = 1;              ///< fixes gains, dead taxels and the noise stream
+  /// Soft saturation: counts = S tanh(counts / S) before the noise (a resistive cell's response
+  /// flattens under load); 0 = linear up to the hard full scale.
+  double saturation_counts = 0.0;
+  /// Fraction of the previous frame's noiseless counts that persists into the next frame
+  /// (hysteresis of the foam and the resistive layer: a ghost of the last press); 0 = none.
+  double hysteresis = 0.0;
+  /// Standard deviation of each frame's step of the taxels' baseline random walk, counts (half
+  /// the variance common to the array, half per taxel); 0 = a fixed zero.
+  double baseline_drift_counts = 0.0;
+  std::uint64_t seed = 1;  ///< fixes gains, dead taxels and the noise stream
   std::chrono::nanoseconds frame_interval = std::chrono::milliseconds(10);  ///< timestamp step
 
   void validate() const {
@@ -217,6 +233,14 @@ struct simulator_params {
     non_negative("gain_counts_per_mm", gain_counts_per_mm, " counts per millimetre");
     non_negative("gain_variation", gain_variation, " (relative, e.g. 0.05 for 5 %)");
     non_negative("noise_counts", noise_counts, " counts");
+    non_negative("saturation_counts", saturation_counts,
+                 " counts (0 = linear; a few thousand for a resistive cell)");
+    non_negative("baseline_drift_counts", baseline_drift_counts,
+                 " counts per frame (standard deviation of the baseline's step)");
+    if (!(hysteresis >= 0.0 && hysteresis < 1.0))
+      detail::fail("simulator_params: hysteresis = ", hysteresis,
+                   "; expected a fraction in [0, 1) of the previous frame that persists "
+                   "(0 = none, 0.05 is a worn foam)");
     if (supersample < 1 || supersample > 64)
       detail::fail("simulator_params: supersample = ", supersample,
                    "; expected 1 .. 64 sample points per cell side (4 is plenty)");
@@ -266,6 +290,9 @@ class tactile_simulator {
     sim_rng gain_rng(splitmix64(seeder));
     sim_rng dead_rng(splitmix64(seeder));
     noise_rng_ = sim_rng(splitmix64(seeder));
+    drift_rng_ = sim_rng(splitmix64(seeder));  // drawn after the others: they stay as they were
+    baseline_ = image<float>::Zero(params_.geometry.rows, params_.geometry.cols);
+    previous_ = image<float>::Zero(params_.geometry.rows, params_.geometry.cols);
 
     gain_.resize(rows, cols);
     for (Eigen::Index r = 0; r < rows; ++r)
@@ -378,10 +405,32 @@ class tactile_simulator {
     return dead_.select(0.0F, counts);
   }
 
-  /// One frame as the sensor reports it: expected counts plus noise on loaded taxels, rounded,
-  /// saturated, dead taxels at 0. Advances the noise stream and the frame number.
+  /// The taxels' current baseline offsets (counts; zero unless `baseline_drift_counts`).
+  [[nodiscard]] const image<float>& baseline() const { return baseline_; }
+
+  /// One frame as the sensor reports it: expected counts (plus the previous frame's ghost,
+  /// compressed by the soft saturation) plus noise on loaded taxels, plus the drifting baseline,
+  /// rounded, saturated, dead taxels at 0. Advances the noise stream and the frame number.
   [[nodiscard]] tactile_frame render(const map_pose& pose, const press_variation& press = {}) {
-    const image<float> expected = expected_counts(pose, press);
+    image<float> expected = expected_counts(pose, press);
+    if (params_.hysteresis > 0.0) {
+      const image<float> fresh = expected;
+      expected =
+          (expected.cast<double>() + params_.hysteresis * previous_.cast<double>()).cast<float>();
+      previous_ = fresh;
+    }
+    if (params_.saturation_counts > 0.0) {
+      const double s = params_.saturation_counts;
+      expected = expected.unaryExpr(
+          [s](float v) { return static_cast<float>(s * std::tanh(static_cast<double>(v) / s)); });
+    }
+    if (params_.baseline_drift_counts > 0.0) {
+      // A random walk: the baseline a touch meets is where the previous frames left it.
+      const double step = params_.baseline_drift_counts * std::sqrt(0.5);
+      const double common = step * drift_rng_.normal();
+      for (Eigen::Index t = 0; t < baseline_.size(); ++t)
+        baseline_.data()[t] += static_cast<float>(common + step * drift_rng_.normal());
+    }
     tactile_frame frame;
     frame.geometry = params_.geometry;
     frame.counts.resize(expected.rows(), expected.cols());
@@ -390,7 +439,9 @@ class tactile_simulator {
       // where the others are touched.
       const double noise = params_.noise_counts * noise_rng_.normal();
       const double e = expected.data()[t];
-      const double value = (e > 0.0 && !dead_.data()[t]) ? std::round(e + noise) : 0.0;
+      double value = (e > 0.0 && !dead_.data()[t]) ? std::round(e + noise) : 0.0;
+      if (params_.baseline_drift_counts > 0.0 && !dead_.data()[t])
+        value += std::round(static_cast<double>(baseline_.data()[t]));
       frame.counts.data()[t] = static_cast<float>(
           std::clamp(value, 0.0, static_cast<double>(params_.full_scale_counts)));
     }
@@ -444,6 +495,9 @@ class tactile_simulator {
   image<float> gain_;
   image<bool> dead_;
   sim_rng noise_rng_;
+  sim_rng drift_rng_;
+  image<float> baseline_;  // counts, the drifting zero of every taxel
+  image<float> previous_;  // the previous frame's noiseless counts (hysteresis)
   std::uint32_t frames_ = 0;
 };
 
