@@ -281,7 +281,7 @@ int main(int argc, char** argv) try {
       "model: " + config.name() + " (the library's default); " + scenario_words;
   write_figure(gecko_png, run, experiment.visual_map(),
                experiment.filter().grid().base().window_size(), protocol.mm_per_px, false,
-               {"gecko_demo: " + std::to_string(run.touches.size()) +
+               {"tacmap: " + std::to_string(run.touches.size()) +
                     " touches on the bundled gecko (sequence 0, the path of the paper's Fig. 5)",
                 model_words});
   std::printf(
@@ -304,7 +304,7 @@ int main(int argc, char** argv) try {
   const std::filesystem::path horse_png = std::filesystem::absolute(out_dir / "horse_demo.png");
   write_figure(horse_png, horse_run, horse_experiment.visual_map(),
                horse_experiment.filter().grid().base().window_size(), horse.mm_per_px, true,
-               {"gecko_demo: " + std::to_string(horse_run.touches.size()) +
+               {"tacmap: " + std::to_string(horse_run.touches.size()) +
                     " touches on a photo of a dark horse on white (data/horse): raised parts "
                     "look dark",
                 model_words});

@@ -6,7 +6,9 @@
 
 #include "tacmap/config.hpp"
 
-PYBIND11_MODULE(tacmap, m) {
+// The compiled part of the package tacmap (python/tacmap/__init__.py re-exports it, after checking
+// that this interpreter is the one it was built for).
+PYBIND11_MODULE(_tacmap, m) {
   namespace tp = tacmap::python;
   m.doc() =
       R"doc(tacmap: localize a tactile sensor's contact on an object by matching tactile images

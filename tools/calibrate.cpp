@@ -43,13 +43,23 @@ struct named_map {
 }  // namespace
 
 int main(int argc, char** argv) try {
-  CLI::App app{"tacmap-calibrate: fit the likelihood's temperature by maximum likelihood"};
+  CLI::App app{
+      "tacmap-calibrate: fit the likelihood's temperature (tau) by maximum likelihood on "
+      "simulated touches (docs/tools.md)\n\n"
+      "Examples:\n"
+      "  tacmap-calibrate --protocol data/gecko\n"
+      "      the bundled gecko, the default model, the realistic scenario\n"
+      "  tacmap-calibrate --protocol data/gecko --photo object.jpg --curve tau.csv\n"
+      "      the gecko and your photograph together; the score curve into tau.csv\n"
+      "  tacmap-calibrate --protocol data/gecko --model sift_lite --scenario ideal\n"
+      "      another model, another scenario\n"};
   std::vector<std::string> photos, protocols;
   std::string model_name = "classic_sift", scenario_name = "realistic", curve_path;
   std::uint64_t seed = 101;
   long long sequences = 0;
-  long long map_px = tacmap_tools::default_map_px;  // signed: a negative size is refused
-  long long patch_spacing = 0;                      // 0: the model's default
+  long long max_side = tacmap_tools::default_map_px;  // signed: a negative size is refused
+  long long map_px = 0;                               // --map-px: a square map
+  long long patch_spacing = 0;                        // 0: the model's default
   bool native = false;
   double tau_min = 0.01, tau_max = 10.0;
   double truth_radius = tacmap::tau_fit_params{}.truth_radius_mm;
@@ -64,10 +74,16 @@ int main(int argc, char** argv) try {
   app.add_option("--seed", seed, "seeds the simulator and the photographs' protocols (101)")
       ->check(CLI::NonNegativeNumber);  // an unsigned option: -1 would wrap
   app.add_option("--sequences", sequences, "use the first N sequences of each map (0 = all)");
-  auto* map_px_option = app.add_option(
-      "--map-px", map_px, "side of the photographs' square maps, px (120; resized by area)");
+  auto* max_side_option = app.add_option(
+      "--max-side", max_side,
+      "the photographs' maps: the longer side, px, the aspect ratio kept (120; resized by area)");
+  auto* map_px_option =
+      app.add_option("--map-px", map_px,
+                     "the photographs' maps: N x N px instead, the aspect ratio not kept")
+          ->excludes(max_side_option);
   app.add_flag("--native", native, "keep each photograph's own size as its map")
-      ->excludes(map_px_option);
+      ->excludes(map_px_option)
+      ->excludes(max_side_option);
   app.add_option("--spacing", patch_spacing,
                  "px between the tactile image's descriptor patches (default: classic_sift 13, "
                  "sift_lite 9)")
@@ -85,7 +101,15 @@ int main(int argc, char** argv) try {
     throw CLI::ValidationError("--sequences", std::to_string(sequences) +
                                                   " is not a number of sequences; expected N >= 0 "
                                                   "(the first N of each map; 0 = all)");
-  if (!native) tacmap_tools::check_map_px(map_px);
+  const tacmap_tools::map_sizing sizing =
+      native ? tacmap_tools::map_sizing{tacmap_tools::map_sizing::kind::native, 0}
+      : map_px_option->count() > 0
+          ? tacmap_tools::map_sizing{tacmap_tools::map_sizing::kind::square, map_px}
+          : tacmap_tools::map_sizing{tacmap_tools::map_sizing::kind::max_side, max_side};
+  if (!native)
+    tacmap_tools::check_map_px(sizing.px, sizing.how == tacmap_tools::map_sizing::kind::square
+                                              ? "--map-px"
+                                              : "--max-side");
   if (photos.empty() && protocols.empty())
     throw CLI::ValidationError("maps",
                                "no map given; expected --photo FILE or --protocol FOLDER (at "
@@ -124,9 +148,8 @@ int main(int argc, char** argv) try {
                     tacmap::load_protocol(std::filesystem::path(dir) / "protocol.txt")});
   for (std::size_t i = 0; i < photos.size(); ++i) {
     std::uint64_t s = seed + 0x9E3779B97F4A7C15ULL * (i + 1);
-    maps.push_back(
-        {std::filesystem::path(photos[i]).stem().string(),
-         tacmap_tools::photo_protocol(photos[i], tacmap::splitmix64(s), 7, native ? 0 : map_px)});
+    maps.push_back({std::filesystem::path(photos[i]).stem().string(),
+                    tacmap_tools::photo_protocol(photos[i], tacmap::splitmix64(s), 7, sizing)});
   }
 
   using filter_type = tacmap::localization_experiment::filter_type;

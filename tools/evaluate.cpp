@@ -7,8 +7,9 @@
 // staying below), median touches to localize, median final error.
 //
 // Maps: the bundled gecko with its protocol (--gecko, on by default), and photographs (--photo,
-// PNG, JPEG or binary PGM): each is turned grey, area-resized to 120 x 120 px (--map-px N; or
-// kept at its own size, --native; either is reported on stderr) at the paper's 3.4/3 mm per px,
+// PNG, JPEG or binary PGM): each is turned grey, area-resized so that its longer side
+// is 120 px, the aspect ratio kept (--max-side N; --map-px N for an N x N square; or kept at its
+// own size, --native; each is reported on stderr) at the paper's 3.4/3 mm per px,
 // pressed as a continuous relief (height = 4 mm x intensity) and given a
 // generated protocol — 7 random touch locations, 22 random orders, odometry noise 0.5 mm per
 // axis — all fixed by --seed. Everything (simulator noise included) is reproducible from --seed.
@@ -267,7 +268,16 @@ std::string conditions_text(const char* scenario, const tacmap::simulator_params
 }  // namespace
 
 int main(int argc, char** argv) try {
-  CLI::App app{"tacmap-evaluate: localization over maps x configurations (paper Sec. IV-B)"};
+  CLI::App app{
+      "tacmap-evaluate: localization over maps x configurations (paper Sec. IV-B); a summary "
+      "table per map and one CSV row per touch (docs/tools.md)\n\n"
+      "Examples:\n"
+      "  tacmap-evaluate --output gecko.csv\n"
+      "      the bundled gecko, the default configuration, all 22 sequences\n"
+      "  tacmap-evaluate --no-gecko --photo object.jpg --scenario realistic --output object.csv\n"
+      "      your photograph as the map (longer side 120 px), a simulated camera and sensor\n"
+      "  tacmap-evaluate --model sift_lite,ncc --sequences 6 --output compare.csv\n"
+      "      two configurations compared (comma-separated lists: their cross product)\n"};
   std::string gecko_dir;  // empty: default_gecko_dir()
   bool no_gecko = false;
   std::vector<std::string> photos;
@@ -401,7 +411,8 @@ int main(int argc, char** argv) try {
   // Exploration faults (sim/faults.hpp).
   tacmap::exploration_faults faults;
   std::size_t photo_touches = 7;
-  long long map_px = tacmap_tools::default_map_px;  // signed: a negative size is refused
+  long long max_side = tacmap_tools::default_map_px;  // signed: a negative size is refused
+  long long map_px = 0;                               // --map-px: a square map
   bool native = false;
   double odometry_noise = -1.0;
   app.add_option("--outliers", faults.outlier_probability,
@@ -460,10 +471,16 @@ int main(int argc, char** argv) try {
   app.add_option("--touches", photo_touches,
                  "touches per sequence of the photographs' protocols (7; the gecko's are fixed)")
       ->check(CLI::Range(1, 200));
-  auto* map_px_option = app.add_option(
-      "--map-px", map_px, "side of the photographs' square maps, px (120; resized by area)");
+  auto* max_side_option = app.add_option(
+      "--max-side", max_side,
+      "the photographs' maps: the longer side, px, the aspect ratio kept (120; resized by area)");
+  auto* map_px_option =
+      app.add_option("--map-px", map_px,
+                     "the photographs' maps: N x N px instead, the aspect ratio not kept")
+          ->excludes(max_side_option);
   app.add_flag("--native", native, "keep each photograph's own size as its map")
-      ->excludes(map_px_option);
+      ->excludes(map_px_option)
+      ->excludes(max_side_option);
   app.add_option("--sequences", sequences, "run only the first N sequences of each map (0 = all)");
   app.add_option("--seed", seed, "seeds the simulator and the photographs' protocols")
       ->check(CLI::NonNegativeNumber);  // an unsigned option: -1 would wrap
@@ -535,7 +552,15 @@ int main(int argc, char** argv) try {
                                                   " is not a number of sequences; expected N >= 0 "
                                                   "(the first N of each map; 0 = all)");
   max_sequences = static_cast<std::size_t>(sequences);
-  if (!native) tacmap_tools::check_map_px(map_px);
+  const tacmap_tools::map_sizing sizing =
+      native ? tacmap_tools::map_sizing{tacmap_tools::map_sizing::kind::native, 0}
+      : map_px_option->count() > 0
+          ? tacmap_tools::map_sizing{tacmap_tools::map_sizing::kind::square, map_px}
+          : tacmap_tools::map_sizing{tacmap_tools::map_sizing::kind::max_side, max_side};
+  if (!native)
+    tacmap_tools::check_map_px(sizing.px, sizing.how == tacmap_tools::map_sizing::kind::square
+                                              ? "--map-px"
+                                              : "--max-side");
   if (odometry_noise >= 0.0) faults.odometry_sigma_mm = odometry_noise;
   faults.oracle =
       parse_choice<tacmap::fault_oracle>("--fault-oracle", oracle_name,
@@ -783,9 +808,8 @@ int main(int argc, char** argv) try {
   }
   for (std::size_t i = 0; i < photos.size(); ++i) {
     std::uint64_t s = seed + 0x9E3779B97F4A7C15ULL * (i + 1);
-    maps.push_back(
-        {std::filesystem::path(photos[i]).stem().string(),
-         photo_protocol(photos[i], tacmap::splitmix64(s), photo_touches, native ? 0 : map_px)});
+    maps.push_back({std::filesystem::path(photos[i]).stem().string(),
+                    photo_protocol(photos[i], tacmap::splitmix64(s), photo_touches, sizing)});
   }
   if (maps.empty()) throw CLI::ValidationError("maps", "no map: drop --no-gecko or give --photo");
 

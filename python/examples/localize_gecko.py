@@ -9,8 +9,8 @@ what a robot would have: the raw frames and the arm's measured motion between to
 truth. It prints one line per touch (the estimate's error, the belief's P(error <= 5 mm), the
 verdict) and writes a figure of the map and the belief after each touch.
 
-Run (after building the module, see python/CMakeLists.txt or scripts/python_demo):
-    PYTHONPATH=build/python/python python3 python/examples/localize_gecko.py [out.png]
+Run (after `python3 -m pip install .` in a venv, which scripts/python_demo does):
+    python3 python/examples/localize_gecko.py [out.png]
 Exit status 0 when the final estimate is within 5 mm of the truth.
 """
 
@@ -59,7 +59,10 @@ def main():
     # The sensor's footprint on the map, (width, height) mm, drawn at the estimate.
     footprint = np.array([loc.sensor.cols, loc.sensor.rows]) * loc.sensor.pitch_mm
     steps = protocol.sequences[args.sequence]
-    fig, axes = plt.subplots(1, len(steps), figsize=(2.4 * len(steps), 3.2), squeeze=False)
+    # Row 1: the whole map; row 2: 30 x 30 mm around the estimate, where a converged belief's
+    # few millimetres are visible.
+    fig, axes = plt.subplots(2, len(steps), figsize=(2.4 * len(steps) + 0.8, 5.6), squeeze=False,
+                             layout="constrained")
     print(f"gecko, sequence {args.sequence}: {len(steps)} touches, config {loc.config.name()}")
     print("touch  error (mm)  P(within 5 mm)  verdict")
     error = float("inf")
@@ -71,25 +74,34 @@ def main():
         error = float(np.linalg.norm(r.position_mm - truth))
         print(f"{t + 1:5d}  {error:10.2f}  {r.probability_within:14.3f}  {r.verdict}")
 
-        # The belief on a log scale over six decades (a linear scale shows a converged belief
-        # as a single dot), over the map; extent_mm puts both in map millimetres.
-        ax = axes[0, t]
-        ax.imshow(protocol.map, cmap="gray", alpha=0.6, extent=loc.map_extent_mm)
-        log_belief = np.log10(np.maximum(loc.belief(), 1e-30))
-        ax.imshow(np.ma.masked_less(log_belief, log_belief.max() - 6.0), cmap="viridis",
-                  alpha=0.85, extent=loc.extent_mm, vmin=log_belief.max() - 6.0,
-                  vmax=log_belief.max())
-        ax.add_patch(plt.Rectangle(r.position_mm - footprint / 2, *footprint, fill=False,
-                                   edgecolor="white", linewidth=1))
-        ax.plot(*truth, "r+", markersize=10, markeredgewidth=2, label="truth")
-        ax.plot(*r.position_mm, "wo", markersize=5, fillstyle="none", label="estimate")
-        ax.set_title(f"touch {t + 1}: {r.verdict}\nerror {error:.1f} mm", fontsize=8)
-        ax.set_xticks([])
-        ax.set_yticks([])
+        # The belief relative to its peak on a log scale over six decades (a linear scale shows
+        # a converged belief as a single dot), in bright colours over the light map; states
+        # below a millionth of the peak stay transparent. extent_mm puts both in map millimetres.
+        belief = loc.belief()
+        relative = np.log10(np.maximum(belief / belief.max(), 1e-30))
+        for row, ax in enumerate(axes[:, t]):
+            ax.imshow(protocol.map, cmap="gray", vmin=-1.5, vmax=1.2, extent=loc.map_extent_mm)
+            shown = ax.imshow(np.ma.masked_less(relative, -6.0), cmap="turbo", vmin=-6.0,
+                              vmax=0.0, alpha=0.85, extent=loc.extent_mm)
+            ax.add_patch(plt.Rectangle(r.position_mm - footprint / 2, *footprint, fill=False,
+                                       edgecolor="black", linewidth=1))
+            ax.plot(*truth, "+", color="magenta", markersize=9, markeredgewidth=1.5,
+                    label="truth")
+            ax.plot(*r.position_mm, "o", color="black", markersize=6, fillstyle="none",
+                    label="estimate")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if row == 1:  # the zoom, in map mm (y down, as the map)
+                ax.set_xlim(r.position_mm[0] - 15.0, r.position_mm[0] + 15.0)
+                ax.set_ylim(r.position_mm[1] + 15.0, r.position_mm[1] - 15.0)
+                ax.set_title("30 x 30 mm around the estimate", fontsize=7)
+        axes[0, t].set_title(f"touch {t + 1}: {r.verdict}\nerror {error:.1f} mm", fontsize=8)
     axes[0, 0].legend(loc="lower left", fontsize=6)
-    fig.suptitle("tacmap: belief over the sensor's position after each touch (log scale, six "
-                 "decades; box: the sensor at the estimate)", fontsize=9)
-    fig.tight_layout()
+    bar = fig.colorbar(shown, ax=axes.ravel().tolist(), shrink=0.6, pad=0.01)
+    bar.set_label("belief / its peak (log10)", fontsize=8)
+    bar.ax.tick_params(labelsize=7)
+    fig.suptitle("tacmap: belief over the sensor's position after each touch (transparent: below "
+                 "a millionth of the peak; box: the sensor at the estimate)", fontsize=9)
     fig.savefig(args.output, dpi=100)
     print(f"wrote {args.output}")
     if not error < 5.0:

@@ -20,10 +20,9 @@
 #include "tacmap/testing/conformance.hpp"
 #ifdef TACMAP_TEST_TBB
 #include "tacmap/executor/tbb_executor.hpp"
+#endif
 
 namespace test_executor {
-
-#endif
 
 namespace {
 
