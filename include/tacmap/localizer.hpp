@@ -11,6 +11,7 @@
 // tacmap-evaluate measures is what a localizer runs.
 #pragma once
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <concepts>

@@ -31,6 +31,7 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <utility>
 #include <vector>
 
