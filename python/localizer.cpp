@@ -130,6 +130,8 @@ sensor's geometry; call `touch` for every frame with the arm's motion since the 
 Preparing the map (the measurement model's descriptors of every window) happens once, in the
 constructor; `reset()` starts a new exploration on the same map. Each touch is one step of the
 paper's Table 1: predict with the motion since the previous touch, update with the frame.
+The measurement model is one of the shipped ones (LocalizerConfig.model); a descriptor of your
+own runs through the same front door in C++ only (tacmap::descriptor_localizer<D>).
 
 Frames are Frame objects or 2-D arrays of raw counts, shape (sensor.rows, sensor.cols), any
 real dtype (copied to float32). Positions are millimetres in the map frame: x to the right
@@ -189,7 +191,9 @@ void bind_config(py::module_& m) {
   enum_property(cfg, "model", &localizer_config::model, model_names,
                 "Which measurement model localizes: 'sift_lite' (the paper's 2 x 2 x 8 dense "
                 "SIFT, eq. (1)-(2)), 'classic_sift' (4 x 4 x 8 dense SIFT; the default, best "
-                "measured) or 'ncc' (normalised cross-correlation baseline).");
+                "measured) or 'ncc' (normalised cross-correlation baseline). Every shipped "
+                "model is here; a descriptor of your own runs in C++ only "
+                "(tacmap::descriptor_localizer<D>).");
   enum_property(cfg, "pairs", &localizer_config::pairs, pairing_names,
                 "Descriptor models: which tactile patch is compared with which window patch "
                 "in eq. (1): 'all_pairs' (the paper) or 'aligned' (patch m against patch m).");

@@ -212,8 +212,10 @@ int main(int argc, char** argv) try {
     return 1;
   }
   std::printf(
-      "fitted tau = %.4g (use descriptor_likelihood_params::tau or tacmap-evaluate --tau)\n",
-      fit.tau);
+      "fitted tau = %.4g (set tacmap::localizer_config::tau = %.4g for this model, or "
+      "tacmap-evaluate --tau; for a descriptor of your own, tacmap::fit_tau in "
+      "tacmap/sim/calibration.hpp)\n",
+      fit.tau, fit.tau);
   return 0;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "\ntacmap-calibrate: %s\n", e.what());

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -14,6 +15,7 @@
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/io/image_file.hpp"
+#include "tacmap/sim/calibration.hpp"
 #include "tacmap/sim/protocol.hpp"
 #include "tacmap/sim/random.hpp"
 #include "tacmap/tactile/preprocess.hpp"
@@ -113,40 +115,14 @@ inline image<float> load_photo(const std::string& path, map_sizing sizing = {}) 
 // axis (the gecko protocol's noise), from `seed`.
 inline tacmap::touch_protocol photo_protocol(const std::string& path, std::uint64_t seed,
                                              std::size_t touches = 7, map_sizing sizing = {}) {
-  tacmap::touch_protocol p;
-  p.map_file = path;
-  p.map = load_photo(path, sizing);
-  p.mm_per_px = photo_mm_per_px;
-  p.relief = {.kind = tacmap::relief_kind::continuous,
-              .threshold = 0.5F,
-              .height_mm = 4.0,
-              .edge_smoothing_px = 0.0};
-  p.odometry_sigma_mm = 0.5;
-  p.seed = seed;
-  const tacmap::planar_grid<float> grid(p.map_size(), p.mm_per_px,
-                                        tacmap::tactile_window({}, p.mm_per_px));
-  // Distinct locations are drawn until there are enough: a small map may not have that many.
-  if (static_cast<std::size_t>(grid.size()) < touches)
-    tacmap::detail::fail("photo '", path, "': a ", p.map.cols(), " x ", p.map.rows(),
-                         " px map has ", grid.size(), " sensor positions, fewer than the ", touches,
-                         " distinct touches asked for; expected a larger map (--max-side) "
-                         "or fewer --touches");
-  tacmap::sim_rng rng(seed);
-  while (p.locations.size() < touches) {  // distinct states
-    const auto s = grid.state_mm(
-        static_cast<Eigen::Index>(rng.below(static_cast<std::uint64_t>(grid.size()))));
-    const tacmap::touch_location loc{s(0), s(1)};
-    if (std::find(p.locations.begin(), p.locations.end(), loc) == p.locations.end())
-      p.locations.push_back(loc);
+  try {
+    tacmap::touch_protocol p =
+        tacmap::photo_touch_protocol(load_photo(path, sizing), photo_mm_per_px, seed, touches);
+    p.map_file = path;
+    return p;
+  } catch (const std::invalid_argument& e) {
+    tacmap::detail::fail("photo '", path, "': ", e.what(), " (--max-side, --touches)");
   }
-  const std::size_t n = p.locations.size();
-  for (int q = 0; q < 22; ++q) {
-    std::vector<std::size_t> order(n);
-    for (std::size_t k = 0; k < n; ++k) order[k] = k;
-    for (std::size_t k = n - 1; k > 0; --k) std::swap(order[k], order[rng.below(k + 1)]);
-    p.sequences.push_back(tacmap::sequence_visiting(p.locations, order, p.odometry_sigma_mm, rng));
-  }
-  return p;
 }
 
 }  // namespace tacmap_tools

@@ -52,12 +52,16 @@ struct library_map {
   double mm_per_px = 0.0;
 };
 
-/// The filter a `library_localizer` runs: objects x appearance hypotheses x positions (known
-/// heading), each object's block the filter `make_planar_filter` builds for its map.
-using library_localizer_filter =
+/// The filter a `basic_library_localizer<M>` runs: objects x appearance hypotheses x positions
+/// (known heading), each object's block the filter `make_planar_filter` builds for its map with
+/// the measurement policy M (localizer.hpp).
+template <class M>
+using library_filter_for =
     bayes_filter<library_grid<latent_grid<planar_grid<float>>>,
                  library_motion<robust_motion<latent_motion<odometry_gaussian>>>,
-                 library_likelihood<appearance_likelihood<configured_measurement>>>;
+                 library_likelihood<appearance_likelihood<typename M::planar_model>>>;
+/// The filter a `library_localizer` runs (the shipped models, `configured_models`).
+using library_localizer_filter = library_filter_for<configured_models>;
 
 namespace detail {
 // Checks a library's maps: at least one, each named, non-empty, finite, with a valid scale, and
@@ -113,10 +117,14 @@ inline void check_library(const std::vector<library_map>& maps) {
 /// for an empty library, a map that is empty, non-finite, given twice or smaller than the sensor
 /// at the library's scale, a scale at which the model cannot describe the sensor's window,
 /// repeated names, a prior that does not sum to one, or an invalid configuration.
-[[nodiscard]] inline library_localizer_filter make_library_filter(
-    const localizer_config& config, const std::vector<library_map>& maps,
-    const taxel_geometry& sensor = {}, std::vector<double> prior = {},
-    std::optional<double> mm_per_px = {}) {
+/// `measurement`: the policy whose planar model each map gets (localizer.hpp).
+template <localizer_measurement M>
+[[nodiscard]] library_filter_for<M> make_library_filter(const M& measurement,
+                                                        const localizer_config& config,
+                                                        const std::vector<library_map>& maps,
+                                                        const taxel_geometry& sensor = {},
+                                                        std::vector<double> prior = {},
+                                                        std::optional<double> mm_per_px = {}) {
   config.validate();
   if (config.headings != 0)
     detail::fail("make_library_filter: headings = ", config.headings,
@@ -125,7 +133,7 @@ inline void check_library(const std::vector<library_map>& maps) {
   const double scale = library_scale(maps, mm_per_px);
   const auto appearances = config.appearances();
   std::vector<latent_grid<planar_grid<float>>> grids;
-  std::vector<appearance_likelihood<configured_measurement>> models;
+  std::vector<appearance_likelihood<typename M::planar_model>> models;
   std::vector<std::string> names;
   for (const library_map& m : maps) {
     const std::string who = "library: '" + m.name + "' at the library's scale";
@@ -136,7 +144,7 @@ inline void check_library(const std::vector<library_map>& maps) {
         planar_grid<float>({.width = map.cols(), .height = map.rows()}, scale, window),
         appearance_names(appearances));
     try {
-      models.emplace_back(configured_measurement(config, map, window), appearances);
+      models.emplace_back(measurement.planar(config, map, window), appearances);
     } catch (const std::invalid_argument& e) {
       detail::fail(who, " (", scale, " mm per px, the sensor's window ", window.width, " x ",
                    window.height, " px): ", e.what(),
@@ -144,7 +152,7 @@ inline void check_library(const std::vector<library_map>& maps) {
     }
     names.push_back(m.name);
   }
-  return library_localizer_filter(
+  return library_filter_for<M>(
       library_grid<latent_grid<planar_grid<float>>>(std::move(grids), std::move(names),
                                                     std::move(prior)),
       library_motion(robust_motion(
@@ -152,7 +160,16 @@ inline void check_library(const std::vector<library_map>& maps) {
               odometry_gaussian({.sigma_mm = config.motion_sigma_mm, .k = config.motion_k}),
               {.switch_probability = config.switch_probability()}),
           detail::robust_params(config))),
-      library_likelihood<appearance_likelihood<configured_measurement>>(std::move(models)));
+      library_likelihood<appearance_likelihood<typename M::planar_model>>(std::move(models)));
+}
+
+/// The shipped models' library filter (`configured_models`): what `library_localizer` runs.
+[[nodiscard]] inline library_localizer_filter make_library_filter(
+    const localizer_config& config, const std::vector<library_map>& maps,
+    const taxel_geometry& sensor = {}, std::vector<double> prior = {},
+    std::optional<double> mm_per_px = {}) {
+  return make_library_filter(configured_models{}, config, maps, sensor, std::move(prior),
+                             mm_per_px);
 }
 
 /// What one touch on a library gave.
@@ -181,7 +198,10 @@ struct library_touch_result {
   [[nodiscard]] bool accepted() const { return rejection == frame_rejection::none; }
 };
 
-/// Which object, and where, from map to estimate: `localizer` over a library of photographs.
+/// Which object, and where, from map to estimate: `basic_localizer` over a library of
+/// photographs, generic over the measurement policy `M` (localizer.hpp): `library_localizer`
+/// runs the shipped models, `basic_library_localizer<descriptor_measurement<D>>` a descriptor
+/// of your own (C++ only).
 ///
 ///     tacmap::library_localizer loc({{"mug", mug, 0.2}, {"box", box, 0.25}});
 ///     auto r = loc.touch(frame);
@@ -189,17 +209,23 @@ struct library_touch_result {
 ///     if (r.verdict == tacmap::verdict::localized) use(r.object_name, r.position_mm);
 ///
 /// Preparing the maps happens once, in the constructor. Not thread-safe.
-class library_localizer {
+template <localizer_measurement Measurement>
+class basic_library_localizer {
  public:
-  /// Throws std::invalid_argument as `make_library_filter`.
+  using filter_type = library_filter_for<Measurement>;
+
   /// `mm_per_px`: the scale the library works at (default: the coarsest map's; see the file
   /// comment). Throws std::invalid_argument as `make_library_filter`.
-  explicit library_localizer(const std::vector<library_map>& maps, localizer_config config = {},
-                             taxel_geometry sensor = {}, std::vector<double> prior = {},
-                             std::optional<double> mm_per_px = {})
+  explicit basic_library_localizer(const std::vector<library_map>& maps,
+                                   localizer_config config = {}, taxel_geometry sensor = {},
+                                   std::vector<double> prior = {},
+                                   std::optional<double> mm_per_px = {},
+                                   Measurement measurement = Measurement{})
       : config_(std::move(config)),
         sensor_(sensor),
-        filter_(make_library_filter(config_, maps, sensor_, std::move(prior), mm_per_px)) {
+        measurement_(std::move(measurement)),
+        filter_(make_library_filter(measurement_, config_, maps, sensor_, std::move(prior),
+                                    mm_per_px)) {
     config_.preprocessing.mm_per_px = library_scale(maps, mm_per_px);
   }
 
@@ -221,14 +247,19 @@ class library_localizer {
     filter_.reset();
     calls_ = 0;
     touches_ = 0;
+    restarts_ = 0;
   }
 
-  [[nodiscard]] const library_localizer_filter& filter() const { return filter_; }
+  [[nodiscard]] const filter_type& filter() const { return filter_; }
   /// The configuration, with `preprocessing.mm_per_px` set to the library's scale.
   [[nodiscard]] const localizer_config& config() const { return config_; }
+  [[nodiscard]] const Measurement& measurement() const { return measurement_; }
   /// The scale every map was resampled to, mm per px.
   [[nodiscard]] double mm_per_px() const { return config_.preprocessing.mm_per_px; }
   [[nodiscard]] Eigen::Index objects() const { return filter_.grid().objects(); }
+  /// Touches used and restarts from uniform since construction or `reset()`.
+  [[nodiscard]] std::size_t touches() const { return touches_; }
+  [[nodiscard]] std::size_t restarts() const { return restarts_; }
   /// Object k's position belief (summed over its appearance hypotheses), conditioned on k, as
   /// an image of its grid's positions; throws std::domain_error when k has posterior 0.
   [[nodiscard]] image<float> object_belief_image(Eigen::Index k) const {
@@ -245,39 +276,49 @@ class library_localizer {
                    frame.geometry.cols, " taxels at ", frame.geometry.pitch_mm,
                    " mm, but this library was built for ", sensor_.rows, " x ", sensor_.cols,
                    " at ", sensor_.pitch_mm, " mm; build it with the frame's geometry");
-    // Preprocess first: a malformed frame throws before anything changes.
+    // Preprocess (and let the policy check the touch) first: a malformed frame throws before
+    // anything changes.
     const preprocessed_frame pre = preprocess(frame, config_.preprocessing);
-    library_touch_result r;
+    if constexpr (requires { measurement_.check_touch(config_, pre.pixels); })
+      if (pre.accepted()) measurement_.check_touch(config_, pre.pixels);
     const std::vector<image<float>> view{pre.pixels};  // one scale: one view for every map
-    const std::optional<update_report> report = detail::predict_and_update(
+    const auto out = detail::localizer_step(
         filter_,
         [&] {
           if (calls_ > 0 && moved) filter_.predict(*moved);
         },
-        pre.accepted() ? &view : nullptr, touches_, r.restarted);
+        pre.accepted() ? &view : nullptr, config_.confidence, touches_, restarts_);
     ++calls_;
+    library_touch_result r;
+    r.restarted = out.restarted;
     r.rejection = pre.rejection;
-    const auto est = filter_.estimate();
-    const confidence conf = report ? assess(filter_, est, *report, config_.confidence)
-                                   : assess(filter_, est, config_.confidence);
-    r.verdict = pre.accepted() ? conf.verdict : verdict::rejected_frame;
+    const auto& est = out.estimate;
+    r.verdict = pre.accepted() ? out.assessment.verdict : verdict::rejected_frame;
     r.object = est.map_object;
     r.object_name = filter_.grid().object_name(est.map_object);
     r.object_probability = est.object_probability;
     r.tied_objects = est.tied_objects;
-    r.position_mm = conf.centre_mm;
-    r.probability_within = conf.probability_within;
+    r.position_mm = out.assessment.centre_mm;
+    r.probability_within = out.assessment.probability_within;
     r.appearance_probability = est.hypothesis_probability;
-    if (report) r.log_prediction_support = report->log_prediction_support;
+    if (out.report) r.log_prediction_support = out.report->log_prediction_support;
     r.touches = touches_;
     return r;
   }
 
   localizer_config config_;
   taxel_geometry sensor_;
-  library_localizer_filter filter_;
+  Measurement measurement_;
+  filter_type filter_;
   std::size_t calls_ = 0;
   std::size_t touches_ = 0;
+  std::size_t restarts_ = 0;
+};
+
+/// The library front door with the shipped models (`configured_models`).
+class library_localizer : public basic_library_localizer<configured_models> {
+ public:
+  using basic_library_localizer::basic_library_localizer;
 };
 
 }  // namespace tacmap

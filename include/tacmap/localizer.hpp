@@ -11,7 +11,11 @@
 // tacmap-evaluate measures is what a localizer runs.
 #pragma once
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <concepts>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -26,6 +30,8 @@
 
 #include "tacmap/descriptor/dense_sift.hpp"
 #include "tacmap/descriptor/unsigned_orientation.hpp"
+#include "tacmap/detail/memory_budget.hpp"
+#include "tacmap/detail/type_name.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/filter/confidence.hpp"
 #include "tacmap/grid/latent_grid.hpp"
@@ -187,6 +193,13 @@ struct localizer_config {
   /// more without faults. Turn it on where objects slip in the grasp.
   static constexpr double default_broad_probability = 0.0;
   double broad_sigma_mm = 10.0;
+  /// The longest preparing a map may take, seconds (infinity: no limit). Applies where a
+  /// descriptor's per-window features cost one `compute()` per window (no `describes_windows`
+  /// hook, descriptor/concept.hpp H4: a user's descriptor, `appearance = unsigned`): the time is
+  /// measured on a few windows and extrapolated first, and a preparation above the budget is
+  /// refused (`preparation_over_budget`) with the figures and what to change. 10 s: a simple
+  /// descriptor on a 600 x 512 px photograph would otherwise take about a minute, silently.
+  double preparation_budget_s = 10.0;
   [[nodiscard]] double broad() const {
     return broad_probability.value_or(default_broad_probability);
   }
@@ -337,6 +350,85 @@ struct localizer_config {
   }
 };
 
+/// Thrown when preparing a map would take longer than `localizer_config::preparation_budget_s`
+/// (per-window features of a descriptor without the `describes_windows` fast path, H4). The
+/// message names the descriptor, both figures, the memory it would take and what to change; the
+/// figures are fields.
+class preparation_over_budget : public std::runtime_error {
+ public:
+  preparation_over_budget(const std::string& message, double estimated, double budget)
+      : std::runtime_error(message), estimated_seconds(estimated), budget_seconds(budget) {}
+  double estimated_seconds;  ///< the extrapolated time of describing every window
+  double budget_seconds;     ///< localizer_config::preparation_budget_s
+};
+
+namespace detail {
+
+/// Issue 33, "cost guard": per-window features of a descriptor D without H4 cost one
+/// `compute()` per window of the map (120 x 120 px: 8,000 windows; 600 x 512 px: 260,000, about
+/// a minute for a simple descriptor). Before any of it, this times `compute()` on up to 32
+/// windows spread over the map (stopping after 50 ms), extrapolates to every window and refuses
+/// above `budget_s` (infinity: never) with the figures and what to do. Descriptors with H4 do
+/// not come here (they share the work between windows).
+template <descriptor D>
+void guard_window_preparation(const D& d, const image<float>& map, pixel_size window,
+                              Eigen::Index spacing, double budget_s) {
+  if (!(budget_s > 0.0))
+    fail("localizer_config: preparation_budget_s = ", budget_s,
+         "; expected the longest a map's preparation may take, in seconds, > 0 (infinity: no "
+         "limit; the default is 10)");
+  if (std::isinf(budget_s)) return;
+  // The model's own checks first (window, patch, finite map): their messages, not compute()'s.
+  const auto offsets =
+      checked_patch_offsets(type_name<D>().c_str(), map, window, d.patch_size(), spacing);
+  const Eigen::Index rows = map.rows() - window.height + 1, cols = map.cols() - window.width + 1;
+  const Eigen::Index windows = rows * cols;
+  using T = typename D::scalar_type;
+  using clock = std::chrono::steady_clock;
+  image<T> cut(window.height, window.width);
+  const auto start = clock::now();
+  double elapsed = 0.0;
+  Eigen::Index timed = 0;
+  for (Eigen::Index k = 0; k < std::min<Eigen::Index>(windows, 32); ++k) {
+    const Eigen::Index i = (k * 7919) % windows;  // spread over the map
+    cut = map.block(i / cols, i % cols, window.height, window.width).template cast<T>();
+    const auto f = d.compute(cut);
+    ++timed;
+    elapsed = std::chrono::duration<double>(clock::now() - start).count();
+    if (f.values.size() == 0 || (elapsed > 0.05 && timed >= 2)) break;
+  }
+  const double estimate = elapsed / static_cast<double>(timed) * static_cast<double>(windows);
+  if (estimate <= budget_s) return;
+  const std::uint64_t bytes = saturating_product(windows, offsets.size(), d.dimension(), sizeof(T));
+  std::ostringstream text;
+  text.precision(3);
+  text << "preparing the map with descriptor " << type_name<D>() << " would take about " << estimate
+       << " s (" << windows << " windows of " << window.width << " x " << window.height
+       << " px, one compute() each, " << elapsed / static_cast<double>(timed) * 1e3
+       << " ms per window measured on " << timed << ") and " << bytes_text(bytes)
+       << " of per-window descriptors; the budget is localizer_config::preparation_budget_s = "
+       << budget_s
+       << " s. Use window_features::shared_dense (one dense field, shared by all windows), give "
+          "the descriptor the describe_windows hook (descriptor/concept.hpp, H4), use a coarser "
+          "map (tacmap::rescale), or raise preparation_budget_s";
+  throw preparation_over_budget(text.str(), estimate, budget_s);
+}
+
+/// `descriptor_likelihood<D>(d, map, window, p)`, after the cost guard where it applies
+/// (per-window features without H4).
+template <descriptor D>
+[[nodiscard]] descriptor_likelihood<D> guarded_descriptor_likelihood(
+    D d, const image<float>& map, pixel_size window, const descriptor_likelihood_params& p,
+    double budget_s) {
+  if constexpr (!describes_windows<D>) {
+    if (p.features == window_features::per_window)
+      guard_window_preparation(d, map, window, p.spacing, budget_s);
+  }
+  return descriptor_likelihood<D>(std::move(d), map, window, p);
+}
+
+}  // namespace detail
+
 /// A measurement model chosen at run time from `localizer_config::model`: the three shipped
 /// models behind one `log_likelihood`, so one filter type serves every configuration.
 class configured_measurement {
@@ -460,11 +552,14 @@ class configured_measurement {
     p.both_signs = config.appearance == appearance_handling::latent && p.pairs == pairing::aligned;
     const bool lite = config.model == measurement_kind::lite;
     if (config.appearance == appearance_handling::unsigned_gradients) {
+      // No describe_windows (H4): per-window features go through the cost guard.
       if (lite)
-        return variant_type(std::in_place_index<3>, unsigned_orientation<sift_lite>{}, map, window,
-                            p);
-      return variant_type(std::in_place_index<4>, unsigned_orientation<classic_sift>{}, map, window,
-                          p);
+        return variant_type(std::in_place_index<3>, detail::guarded_descriptor_likelihood(
+                                                        unsigned_orientation<sift_lite>{}, map,
+                                                        window, p, config.preparation_budget_s));
+      return variant_type(std::in_place_index<4>, detail::guarded_descriptor_likelihood(
+                                                      unsigned_orientation<classic_sift>{}, map,
+                                                      window, p, config.preparation_budget_s));
     }
     if (lite) return variant_type(std::in_place_index<1>, sift_lite{}, map, window, p);
     return variant_type(std::in_place_index<2>, classic_sift{}, map, window, p);
@@ -512,14 +607,92 @@ class configured_rotated_measurement {
   variant_type model_;
 };
 
-/// The filter a planar `localizer` runs (known heading): positions x appearance hypotheses.
-using planar_localizer_filter =
+// ---------------------------------------------------------------------------------------------
+// The generic front door: `basic_localizer<Measurement>` over a measurement policy.
+//
+// A measurement policy P says how a localizer builds its measurement models from (config, map,
+// window); everything else a localizer does (the latent appearance, the robust motion, restarts,
+// the calibrated verdict, tracking, preprocessing) is the same for every policy. A type P models
+// `localizer_measurement` when, for a `const P p`, a `localizer_config c`, a map `image<float>`
+// and the sensor's window `pixel_size w`:
+//  1. `typename P::planar_model` is a `measurement_model` over `planar_grid<float>` whose
+//     `measurement_type` is `image<float>` (the preprocessed touch at map scale);
+//  2. `p.planar(c, map, w)` returns one, prepared for `map` (throws std::invalid_argument for a
+//     configuration it cannot honour, naming the setting).
+// Optional hooks:
+//  P1. `typename P::pose_model` and `p.pose(c, map, pose_grid)`: a model over `pose_grid<float>`;
+//      without them a `basic_localizer<P>` refuses `headings` > 0 at construction.
+//  P2. `p.check_touch(c, z)`: checks a touch before the filter moves (throws, the belief
+//      unchanged), for models whose failures should not cost the prediction.
+// Two policies ship: `configured_models` (the run-time choice of `localizer_config::model`, what
+// `tacmap::localizer`, the tools and Python run) and `descriptor_measurement<D>` (any
+// `descriptor` D: `descriptor_localizer<D>`). Minimal conforming policy: `descriptor_measurement`
+// without P2.
+// ---------------------------------------------------------------------------------------------
+
+/// Requirements 1-2 above.
+template <class P>
+concept localizer_measurement = requires(const P& p, const localizer_config& c,
+                                         const image<float>& map, pixel_size w) {
+  typename P::planar_model;
+  { p.planar(c, map, w) } -> std::same_as<typename P::planar_model>;
+}
+&&measurement_model<typename P::planar_model, planar_grid<float>>&&
+    std::same_as<typename P::planar_model::measurement_type, image<float>>;
+
+/// P1 above: the policy can localize the heading too.
+template <class P>
+concept localizes_headings = localizer_measurement<P> &&
+    requires(const P& p, const localizer_config& c, const image<float>& map,
+             const pose_grid<float>& g) {
+  typename P::pose_model;
+  { p.pose(c, map, g) } -> std::same_as<typename P::pose_model>;
+};
+
+/// The shipped models chosen at run time from `localizer_config::model` (lite, classic, ncc):
+/// the policy of `tacmap::localizer`, `tacmap::library_localizer`, the tools and the Python
+/// module. A C++ user with a descriptor of their own uses `descriptor_measurement` instead.
+struct configured_models {
+  using planar_model = configured_measurement;
+  using pose_model = configured_rotated_measurement;
+  [[nodiscard]] planar_model planar(const localizer_config& c, const image<float>& map,
+                                    pixel_size window) const {
+    return configured_measurement(c, map, window);
+  }
+  [[nodiscard]] pose_model pose(const localizer_config& c, const image<float>& map,
+                                const pose_grid<float>& grid) const {
+    return configured_rotated_measurement(c, map, grid);
+  }
+};
+
+/// The planar filter a localizer with policy `M` runs (known heading): positions x appearance
+/// hypotheses, the robust motion, the policy's model under `appearance_likelihood`.
+template <class M>
+using planar_filter_for =
     bayes_filter<latent_grid<planar_grid<float>>, robust_motion<latent_motion<odometry_gaussian>>,
-                 appearance_likelihood<configured_measurement>>;
+                 appearance_likelihood<typename M::planar_model>>;
+namespace detail {
+struct no_pose_filter {};
+template <class M>
+struct pose_filter_of {
+  using type = no_pose_filter;
+};
+template <localizes_headings M>
+struct pose_filter_of<M> {
+  using type = bayes_filter<latent_grid<pose_grid<float>>,
+                            robust_motion<latent_motion<pose_odometry_gaussian>>,
+                            appearance_likelihood<typename M::pose_model>>;
+};
+}  // namespace detail
+/// The (x, y, theta) filter a localizer with policy `M` runs (unknown heading); an empty struct
+/// for a policy without P1.
+template <class M>
+using pose_filter_for = typename detail::pose_filter_of<M>::type;
+
+/// The filter a planar `localizer` runs (known heading): positions x appearance hypotheses.
+using planar_localizer_filter = planar_filter_for<configured_models>;
 /// The filter a `localizer` with unknown heading runs: (x, y, theta) x appearance hypotheses.
-using pose_localizer_filter = bayes_filter<latent_grid<pose_grid<float>>,
-                                           robust_motion<latent_motion<pose_odometry_gaussian>>,
-                                           appearance_likelihood<configured_rotated_measurement>>;
+using pose_localizer_filter = pose_filter_for<configured_models>;
 
 namespace detail {
 
@@ -531,14 +704,18 @@ inline robust_motion_params robust_params(const localizer_config& c) {
           .broad_sigma_mm = c.broad_sigma_mm};
 }
 
-/// The filter half of a localizer's touch, shared by `localizer` and `library_localizer`:
-/// `predict()` (the caller's motion step, or nothing), then the update with `z` when the frame
-/// was accepted (`z` not null), counting it in `touches`. Without the motion floor
-/// (lost_probability = 0) the motion can carry every state the belief allowed off the map, and
-/// a touch can rule out every state the prediction still allowed: the filter (a
-/// std::domain_error) then starts again from uniform, as a user would, and `restarted` says so;
-/// the restarted update's `log_prediction_support` is -inf (the prediction had no support). From
-/// a uniform belief the update cannot fail that way unless the model itself failed: rethrown.
+/// The filter half of a localizer's touch: `predict()` (the caller's motion step, or nothing),
+/// then the update with `z` when the frame was accepted (`z` not null), counting it in
+/// `touches`. The filter starts again from a uniform belief, and `restarted` says so, for two
+/// causes only, both possible without the motion floor (lost_probability = 0):
+///  * the motion carried every state the belief allowed off the map (the motion model's
+///    std::domain_error);
+///  * the touch ruled out every state the prediction still allowed (`contradiction_error`);
+///    the restarted update's `log_prediction_support` is then -inf (the prediction had no
+///    support).
+/// Any other failure is the model's (a likelihood NaN, +inf or -inf everywhere, a degenerate
+/// model's domain_error) and propagates with the belief as the failed step left it: a restart
+/// would hide it, and the same touch would fail again from uniform.
 template <class Filter, class Predict, class Measurement>
 std::optional<update_report> predict_and_update(Filter& filter, Predict&& predict,
                                                 const Measurement* z, std::size_t& touches,
@@ -553,8 +730,8 @@ std::optional<update_report> predict_and_update(Filter& filter, Predict&& predic
   std::optional<update_report> report;
   try {
     report = filter.update(*z);
-  } catch (const std::domain_error&) {
-    if (touches == 0 && !restarted) throw;
+  } catch (const contradiction_error&) {
+    if (touches == 0 && !restarted) throw;  // a uniform belief cannot be contradicted
     filter.reset();
     restarted = true;
     report = filter.update(*z);
@@ -564,34 +741,73 @@ std::optional<update_report> predict_and_update(Filter& filter, Predict&& predic
   return report;
 }
 
+/// What the shared step gives a localizer: the update's report (none for a rejected frame), the
+/// filter's estimate, the verdict's assessment and whether the filter restarted.
+template <class Filter>
+struct step_outcome {
+  std::optional<update_report> report;
+  decltype(std::declval<const Filter&>().estimate()) estimate;
+  tacmap::confidence assessment;
+  bool restarted = false;
+};
+
+/// THE step of both front doors (`basic_localizer`, `basic_library_localizer`; the paper's
+/// Table 1 with the verdict): predict, update, restart from uniform on one of the two
+/// documented causes (`predict_and_update`, counted in `restarts`), assess.
+template <class Filter, class Predict, class Measurement>
+step_outcome<Filter> localizer_step(Filter& filter, Predict&& predict, const Measurement* z,
+                                    const confidence_params& params, std::size_t& touches,
+                                    std::size_t& restarts) {
+  bool restarted = false;
+  std::optional<update_report> report =
+      predict_and_update(filter, std::forward<Predict>(predict), z, touches, restarted);
+  if (restarted) ++restarts;
+  auto est = filter.estimate();
+  const tacmap::confidence conf =
+      report ? assess(filter, est, *report, params) : assess(filter, est, params);
+  return {std::move(report), std::move(est), conf, restarted};
+}
+
 }  // namespace detail
 
 /// The planar filter `config` describes for `map` (intensities) at `mm_per_px`, with a sensor
-/// window of `window` px: what `localizer` and `localization_experiment` run. Throws
-/// std::invalid_argument for an invalid configuration or a map smaller than the window.
-[[nodiscard]] inline planar_localizer_filter make_planar_filter(const localizer_config& config,
-                                                                const image<float>& map,
-                                                                double mm_per_px,
-                                                                pixel_size window) {
+/// window of `window` px and the policy `measurement`'s model: what `basic_localizer<M>` runs.
+/// Throws std::invalid_argument for an invalid configuration or a map smaller than the window.
+template <localizer_measurement M>
+[[nodiscard]] planar_filter_for<M> make_planar_filter(const M& measurement,
+                                                      const localizer_config& config,
+                                                      const image<float>& map, double mm_per_px,
+                                                      pixel_size window) {
   config.validate();
   const planar_grid<float> positions({.width = map.cols(), .height = map.rows()}, mm_per_px,
                                      window);
   const auto appearances = config.appearances();
-  return planar_localizer_filter(
+  return planar_filter_for<M>(
       latent_grid<planar_grid<float>>(positions, appearance_names(appearances)),
       robust_motion(
           latent_motion<odometry_gaussian>(
               odometry_gaussian({.sigma_mm = config.motion_sigma_mm, .k = config.motion_k}),
               {.switch_probability = config.switch_probability()}),
           detail::robust_params(config)),
-      appearance_likelihood<configured_measurement>(configured_measurement(config, map, window),
-                                                    appearances));
+      appearance_likelihood<typename M::planar_model>(measurement.planar(config, map, window),
+                                                      appearances));
+}
+
+/// The shipped models' planar filter (`configured_models`): what `localizer` and
+/// `localization_experiment` run.
+[[nodiscard]] inline planar_localizer_filter make_planar_filter(const localizer_config& config,
+                                                                const image<float>& map,
+                                                                double mm_per_px,
+                                                                pixel_size window) {
+  return make_planar_filter(configured_models{}, config, map, mm_per_px, window);
 }
 
 /// The (x, y, theta) filter for `config.headings` > 0, as `make_planar_filter`.
-[[nodiscard]] inline pose_localizer_filter make_pose_filter(const localizer_config& config,
-                                                            const image<float>& map,
-                                                            double mm_per_px, pixel_size window) {
+template <localizes_headings M>
+[[nodiscard]] pose_filter_for<M> make_pose_filter(const M& measurement,
+                                                  const localizer_config& config,
+                                                  const image<float>& map, double mm_per_px,
+                                                  pixel_size window) {
   config.validate();
   if (config.headings <= 0)
     detail::fail("make_pose_filter: headings = ", config.headings,
@@ -600,7 +816,7 @@ std::optional<update_report> predict_and_update(Filter& filter, Predict&& predic
       planar_grid<float>({.width = map.cols(), .height = map.rows()}, mm_per_px, window),
       config.headings);
   const auto appearances = config.appearances();
-  return pose_localizer_filter(
+  return pose_filter_for<M>(
       latent_grid<pose_grid<float>>(grid, appearance_names(appearances)),
       robust_motion(latent_motion<pose_odometry_gaussian>(
                         pose_odometry_gaussian({.sigma_mm = config.motion_sigma_mm,
@@ -608,8 +824,15 @@ std::optional<update_report> predict_and_update(Filter& filter, Predict&& predic
                                                 .sigma_rad = config.turn_sigma_rad}),
                         {.switch_probability = config.switch_probability()}),
                     detail::robust_params(config)),
-      appearance_likelihood<configured_rotated_measurement>(
-          configured_rotated_measurement(config, map, grid), appearances));
+      appearance_likelihood<typename M::pose_model>(measurement.pose(config, map, grid),
+                                                    appearances));
+}
+
+/// The shipped models' (x, y, theta) filter.
+[[nodiscard]] inline pose_localizer_filter make_pose_filter(const localizer_config& config,
+                                                            const image<float>& map,
+                                                            double mm_per_px, pixel_size window) {
+  return make_pose_filter(configured_models{}, config, map, mm_per_px, window);
 }
 
 /// The belief over positions as a `rows() x cols()` image of the grid's positions: summed over
@@ -681,8 +904,11 @@ struct touch_result {
   double log_marginal_likelihood = 0.0;
   /// Why the frame was rejected (none when it was used).
   frame_rejection rejection = frame_rejection::none;
-  /// The filter started again from a uniform belief at this touch: the motion carried every
-  /// state the belief allowed off the map, or the touch ruled out every one of them.
+  /// The filter started again from a uniform belief at this touch, for one of two causes only
+  /// (both possible without the motion floor, `lost_probability` = 0): the motion carried every
+  /// state the belief allowed off the map, or the touch ruled out every one of them
+  /// (`contradiction_error`). Counted by the localizer's `restarts()`. A model that fails (a
+  /// NaN likelihood, -inf everywhere) throws instead: a restart would not cure it.
   bool restarted = false;
   /// Touches used since construction or `reset()`, this one included.
   std::size_t touches = 0;
@@ -690,37 +916,153 @@ struct touch_result {
   [[nodiscard]] bool accepted() const { return rejection == frame_rejection::none; }
 };
 
-/// One object from map to estimate. Build it from the map image (intensities, any range, row 0
-/// at the top), the map's scale and the sensor's geometry; call `touch` for every frame with
-/// the arm's motion since the previous call (or `touch_at` with the arm's pose).
+/// The measurement policy of a `descriptor` D of the user's own: `descriptor_likelihood<D>` in
+/// the plane and `rotated_descriptor_likelihood<D>` over headings, configured from
+/// `localizer_config` like the shipped models (`pairs`, `shape`, `features`, `storage`, `tau`,
+/// `patch_spacing`, `tempering`). The descriptor is the model: `config.model` is not read;
+/// `tau` defaults to the descriptor models' 0.15 and `patch_spacing` to the paper's 9 (fit your
+/// own tau with `tacmap::fit_tau`, sim/calibration.hpp). What the localizer gives D:
+///  * the latent appearance: with H3 (`contrast_permutation`, descriptor/concept.hpp) both
+///    signs in one pass, else the inverted touch described as a second image;
+///  * robust motion, restarts, the verdict, tracking (descriptor_likelihood has the hooks), the
+///    pose grid (`headings` > 0, any descriptor: the touch is turned, then described);
+///  * `appearance = per_patch` (aligned pairing); `appearance = unsigned` is refused (it needs
+///    dense SIFT's orientation channels: `unsigned_orientation`).
+/// Checks: each touch is described once more before the filter moves (P2), so that a descriptor
+/// returning NaN or a wrong shape is refused, naming it, with the belief unchanged; preparing a
+/// map with per-window features and no H4 is refused above `preparation_budget_s`.
+/// C++ only: the Python module offers the shipped models (`configured_models`).
+template <descriptor D>
+class descriptor_measurement {
+ public:
+  using descriptor_type = D;
+  using planar_model = descriptor_likelihood<D>;
+  using pose_model = rotated_descriptor_likelihood<D>;
+
+  descriptor_measurement() requires std::default_initializable<D>
+  = default;
+  /// Implicit: `descriptor_localizer<D> loc(map, 0.2, config, sensor, D{...})`.
+  descriptor_measurement(D d) : descriptor_(std::move(d)) {}  // NOLINT(google-explicit-constructor)
+
+  [[nodiscard]] const D& descriptor() const { return descriptor_; }
+
+  /// The planar model's parameters `config` gives.
+  [[nodiscard]] static descriptor_likelihood_params planar_params(const localizer_config& c) {
+    descriptor_likelihood_params p;
+    p.pairs = c.pairs;
+    p.shape = c.shape;
+    p.features = c.features;
+    p.storage = c.storage;
+    if (c.tau) p.tau = *c.tau;
+    if (c.patch_spacing) p.spacing = *c.patch_spacing;
+    p.tempering = c.tempering;
+    if (c.appearance == appearance_handling::per_patch)
+      p.contrast = contrast_sign::either_per_patch;
+    if constexpr (contrast_symmetric_descriptor<D>)
+      p.both_signs = c.appearance == appearance_handling::latent && p.pairs == pairing::aligned;
+    return p;
+  }
+
+  [[nodiscard]] planar_model planar(const localizer_config& c, const image<float>& map,
+                                    pixel_size window) const {
+    check_appearance(c);
+    return detail::guarded_descriptor_likelihood(descriptor_, map, window, planar_params(c),
+                                                 c.preparation_budget_s);
+  }
+
+  [[nodiscard]] pose_model pose(const localizer_config& c, const image<float>& map,
+                                const pose_grid<float>& grid) const {
+    check_appearance(c);
+    rotated_likelihood_params p;
+    p.pairs = c.pairs;
+    p.shape = c.shape;
+    if (c.tau) p.tau = *c.tau;
+    if (c.patch_spacing) p.spacing = *c.patch_spacing;
+    p.tempering = c.tempering;
+    return pose_model(descriptor_, map, grid, p);
+  }
+
+  /// P2: the touch `z` (and, for the latent or per-patch appearance of a descriptor without
+  /// H3, its inversion) described and checked before the filter moves: the right shape and
+  /// finite values, else std::invalid_argument naming D and the value.
+  void check_touch(const localizer_config& c, const image<float>& z) const {
+    using T = typename D::scalar_type;
+    const image<T> zt = z.template cast<T>();
+    detail::check_field(descriptor_, descriptor_.compute(zt), zt.rows(), zt.cols(), "the touch");
+    if constexpr (!contrast_symmetric_descriptor<D>) {
+      if (c.appearance == appearance_handling::latent ||
+          c.appearance == appearance_handling::per_patch) {
+        const image<T> inverted = detail::inverted_contrast(zt);
+        detail::check_field(descriptor_, descriptor_.compute(inverted), zt.rows(), zt.cols(),
+                            "the inverted touch (the 'inverted' appearance hypothesis)");
+      }
+    }
+  }
+
+ private:
+  static void check_appearance(const localizer_config& c) {
+    if (c.appearance == appearance_handling::unsigned_gradients)
+      detail::fail("descriptor_measurement<", detail::type_name<D>(),
+                   ">: appearance = unsigned folds dense SIFT's orientation channels "
+                   "(unsigned_orientation) and has no meaning for another descriptor; use "
+                   "appearance = latent (the default: both contrast signs as hypotheses) or "
+                   "per_patch");
+  }
+
+  D descriptor_{};
+};
+
+/// One object from map to estimate, generic over its measurement policy (`localizer_measurement`
+/// above): `localizer` runs the shipped models, `descriptor_localizer<D>` a descriptor of your
+/// own, with the same appearance hypotheses, robust motion, restarts, verdict and pose grid.
+/// Build it from the map image (intensities, any range, row 0 at the top), the map's scale and
+/// the sensor's geometry; call `touch` for every frame with the arm's motion since the previous
+/// call (or `touch_at` with the arm's pose).
 ///
 ///     tacmap::localizer loc(map, 0.2);                        // defaults: the best measured
 ///     auto r = loc.touch(frame);                              // first touch
 ///     r = loc.touch(frame, tacmap::odometry{.dx_mm = 4.0});   // moved 4 mm to the right
 ///     if (r.verdict == tacmap::verdict::localized) use(r.position_mm);
 ///
+///     tacmap::descriptor_localizer<my_descriptor> mine(map, 0.2, config, sensor, my_descriptor{});
+///
 /// Preparing the map (the measurement model's descriptors of every window) happens once, in
 /// the constructor; `reset()` starts a new exploration on the same map. Not thread-safe: one
 /// localizer per thread.
-class localizer {
+template <localizer_measurement Measurement>
+class basic_localizer {
  public:
+  using measurement_policy = Measurement;
+  using planar_filter_type = planar_filter_for<Measurement>;
+  /// `detail::no_pose_filter` for a policy without P1.
+  using pose_filter_type = pose_filter_for<Measurement>;
+  static constexpr bool has_headings = localizes_headings<Measurement>;
+
   /// Throws std::invalid_argument for an empty or non-finite map, a scale that is not a finite
   /// positive number, a map smaller than the sensor's footprint, or an invalid configuration
-  /// (each named with what was expected).
-  localizer(image<float> map, double mm_per_px, localizer_config config = {},
-            taxel_geometry sensor = {})
+  /// (each named with what was expected); `preparation_over_budget` and `insufficient_memory`
+  /// for a preparation that would take too long or too much memory.
+  basic_localizer(image<float> map, double mm_per_px, localizer_config config = {},
+                  taxel_geometry sensor = {}, Measurement measurement = Measurement{})
       : map_(checked_map(std::move(map), mm_per_px)),
         mm_per_px_(mm_per_px),
         config_(std::move(config)),
         sensor_(sensor),
         window_(
-            checked_tactile_window(sensor_, mm_per_px_, {map_.cols(), map_.rows()}, "localizer")) {
+            checked_tactile_window(sensor_, mm_per_px_, {map_.cols(), map_.rows()}, "localizer")),
+        measurement_(std::move(measurement)) {
     config_.validate();
     config_.preprocessing.mm_per_px = mm_per_px_;
-    if (config_.headings == 0)
-      planar_.emplace(make_planar_filter(config_, map_, mm_per_px_, window_));
-    else
-      pose_.emplace(make_pose_filter(config_, map_, mm_per_px_, window_));
+    if (config_.headings == 0) {
+      planar_.emplace(make_planar_filter(measurement_, config_, map_, mm_per_px_, window_));
+    } else if constexpr (has_headings) {
+      pose_.emplace(make_pose_filter(measurement_, config_, map_, mm_per_px_, window_));
+    } else {
+      detail::fail("localizer: headings = ", config_.headings, ", but the measurement policy ",
+                   detail::type_name<Measurement>(),
+                   " has no (x, y, theta) model (pose_model and pose(), localizer.hpp P1); use "
+                   "headings = 0 or give the policy a pose model");
+    }
   }
 
   /// The first touch of an exploration (or one without motion since the previous touch).
@@ -732,7 +1074,7 @@ class localizer {
   /// construction or `reset()` is ignored: there is nothing to move yet.
   touch_result touch(const tactile_frame& frame, const odometry& moved) {
     check_finite(moved.dx_mm, moved.dy_mm, 0.0, "touch");
-    if (pose_)
+    if (!planar_)
       detail::fail("localizer::touch: odometry (", moved.dx_mm, ", ", moved.dy_mm,
                    ") mm is in the map's frame, but this localizer does not know the heading "
                    "(headings = ",
@@ -786,10 +1128,10 @@ class localizer {
 
   /// Starts a new exploration on the same map: a uniform belief, no previous pose.
   void reset() {
-    if (planar_) planar_->reset();
-    if (pose_) pose_->reset();
+    with_filter([](auto& f) { f.reset(); });
     calls_ = 0;
     touches_ = 0;
+    restarts_ = 0;
     last_pose_.reset();
   }
 
@@ -797,30 +1139,37 @@ class localizer {
   /// of the sensor's centre, `positions().rows() x positions().cols()`; the position of element
   /// (r, c) is `positions().state_mm(r * cols + c)`.
   [[nodiscard]] image<float> belief() const {
-    return planar_ ? position_belief(*planar_) : position_belief(*pose_);
+    return with_filter([](const auto& f) { return position_belief(f); });
   }
   /// Unknown heading: the belief per heading (summed over appearances), one image per heading
   /// `heading_rad(k)`. Known heading: one image, `belief()`.
   [[nodiscard]] std::vector<image<float>> heading_belief() const {
     if (planar_) return {belief()};
-    const auto& g = pose_->grid();
-    const auto marginal = marginal_belief(g, pose_->belief());
-    const Eigen::Index plane = g.rows() * g.cols();
     std::vector<image<float>> out;
-    for (Eigen::Index k = 0; k < config_.headings; ++k)
-      out.emplace_back(
-          Eigen::Map<const image<float>>(marginal.data() + k * plane, g.rows(), g.cols()));
+    if constexpr (has_headings) {
+      const auto& g = pose_->grid();
+      const auto marginal = marginal_belief(g, pose_->belief());
+      const Eigen::Index plane = g.rows() * g.cols();
+      for (Eigen::Index k = 0; k < config_.headings; ++k)
+        out.emplace_back(
+            Eigen::Map<const image<float>>(marginal.data() + k * plane, g.rows(), g.cols()));
+    }
     return out;
   }
   /// The heading of layer k of `heading_belief()` (radians, map frame).
   [[nodiscard]] double heading_rad(Eigen::Index k) const {
     if (planar_) return 0.0;
     TACMAP_ASSERT(k >= 0 && k < config_.headings, "heading_rad: layer out of range");
-    return pose_->grid().base().heading(k);
+    if constexpr (has_headings) return pose_->grid().base().heading(k);
+    return 0.0;
   }
 
   /// The sensor centre's candidate positions (the grid of `belief()`).
-  [[nodiscard]] const planar_grid<float>& positions() const { return positions_grid(); }
+  [[nodiscard]] const planar_grid<float>& positions() const {
+    if constexpr (has_headings)
+      if (pose_) return pose_->grid().base().positions();
+    return planar_->grid().base();
+  }
   [[nodiscard]] const image<float>& map() const { return map_; }
   [[nodiscard]] double mm_per_px() const { return mm_per_px_; }
   [[nodiscard]] const taxel_geometry& sensor() const { return sensor_; }
@@ -828,18 +1177,35 @@ class localizer {
   [[nodiscard]] pixel_size window() const { return window_; }
   /// The configuration, with `preprocessing.mm_per_px` set to the map's scale.
   [[nodiscard]] const localizer_config& config() const { return config_; }
+  /// The measurement policy (e.g. `descriptor_measurement<D>::descriptor()`).
+  [[nodiscard]] const Measurement& measurement() const { return measurement_; }
   /// Touches used (accepted frames) since construction or `reset()`.
   [[nodiscard]] std::size_t touches() const { return touches_; }
+  /// Restarts from a uniform belief since construction or `reset()` (see
+  /// `touch_result::restarted` for the two causes).
+  [[nodiscard]] std::size_t restarts() const { return restarts_; }
   /// The underlying filter, for what the localizer does not expose: the planar one (nullptr
   /// when the heading is unknown) and the (x, y, theta) one (nullptr when it is known).
-  [[nodiscard]] const planar_localizer_filter* planar_filter() const {
+  [[nodiscard]] const planar_filter_type* planar_filter() const {
     return planar_ ? &*planar_ : nullptr;
   }
-  [[nodiscard]] const pose_localizer_filter* pose_filter() const {
-    return pose_ ? &*pose_ : nullptr;
-  }
+  [[nodiscard]] const pose_filter_type* pose_filter() const { return pose_ ? &*pose_ : nullptr; }
 
  private:
+  // f(the filter this localizer runs).
+  template <class F>
+  decltype(auto) with_filter(F&& f) {
+    if constexpr (has_headings)
+      if (pose_) return std::forward<F>(f)(*pose_);
+    return std::forward<F>(f)(*planar_);
+  }
+  template <class F>
+  decltype(auto) with_filter(F&& f) const {
+    if constexpr (has_headings)
+      if (pose_) return std::forward<F>(f)(*pose_);
+    return std::forward<F>(f)(*planar_);
+  }
+
   touch_result step(const tactile_frame& frame, const std::optional<sensor_odometry>& moved) {
     if (frame.geometry != sensor_)
       detail::fail("localizer::touch: the frame is ", frame.geometry.rows, " x ",
@@ -848,22 +1214,21 @@ class localizer {
                    " at ", sensor_.pitch_mm,
                    " mm (the footprint on the map depends on it); build the localizer with the "
                    "frame's geometry");
-    // Preprocess first: a malformed frame throws before anything changes.
+    // Preprocess (and let the policy check the touch, P2) first: a malformed frame or a
+    // descriptor that fails on it throws before anything changes.
     const preprocessed_frame pre = preprocess(frame, config_.preprocessing);
-    touch_result r;
-    if (planar_)
-      run(*planar_, pre, moved, r);
-    else
-      run(*pose_, pre, moved, r);
+    if constexpr (requires { measurement_.check_touch(config_, pre.pixels); })
+      if (pre.accepted()) measurement_.check_touch(config_, pre.pixels);
+    touch_result r = with_filter([&](auto& f) { return run(f, pre, moved); });
     ++calls_;
     return r;
   }
 
   template <class Filter>
-  void run(Filter& filter, const preprocessed_frame& pre,
-           const std::optional<sensor_odometry>& moved, touch_result& r) {
+  touch_result run(Filter& filter, const preprocessed_frame& pre,
+                   const std::optional<sensor_odometry>& moved) {
     constexpr bool pose = Filter::grid_type::dimension == 3;
-    const std::optional<update_report> report = detail::predict_and_update(
+    const auto out = detail::localizer_step(
         filter,
         [&] {
           if (calls_ == 0 || !moved) return;
@@ -872,11 +1237,12 @@ class localizer {
           else
             filter.predict(odometry{.dx_mm = moved->du_mm, .dy_mm = moved->dv_mm});
         },
-        pre.accepted() ? &pre.pixels : nullptr, touches_, r.restarted);
+        pre.accepted() ? &pre.pixels : nullptr, config_.confidence, touches_, restarts_);
+    touch_result r;
+    r.restarted = out.restarted;
     r.rejection = pre.rejection;
-    const auto est = filter.estimate();
-    const confidence conf = report ? assess(filter, est, *report, config_.confidence)
-                                   : assess(filter, est, config_.confidence);
+    const auto& est = out.estimate;
+    const confidence& conf = out.assessment;
     r.verdict = pre.accepted() ? conf.verdict : verdict::rejected_frame;
     r.position_mm = conf.centre_mm;
     r.probability_within = conf.probability_within;
@@ -886,16 +1252,12 @@ class localizer {
     if constexpr (pose) r.heading_rad = est.map_mm(2);
     r.entropy_nats = est.entropy_nats;
     r.appearance_probability = est.hypothesis_probability;
-    if (report) {
-      r.log_prediction_support = report->log_prediction_support;
-      r.log_marginal_likelihood = report->log_marginal_likelihood();
+    if (out.report) {
+      r.log_prediction_support = out.report->log_prediction_support;
+      r.log_marginal_likelihood = out.report->log_marginal_likelihood();
     }
     r.touches = touches_;
-  }
-
-  [[nodiscard]] const planar_grid<float>& positions_grid() const {
-    if (planar_) return planar_->grid().base();
-    return pose_->grid().base().positions();
+    return r;
   }
 
   static void check_finite(double a, double b, double c, const char* where) {
@@ -923,12 +1285,29 @@ class localizer {
   localizer_config config_;
   taxel_geometry sensor_;
   pixel_size window_;
-  std::optional<planar_localizer_filter> planar_;
-  std::optional<pose_localizer_filter> pose_;
+  Measurement measurement_;
+  std::optional<planar_filter_type> planar_;
+  std::optional<pose_filter_type> pose_;
   std::size_t calls_ = 0;
   std::size_t touches_ = 0;
+  std::size_t restarts_ = 0;
   std::optional<arm_pose> last_pose_;
 };
+
+/// The front door with the shipped models, chosen at run time by `localizer_config::model`
+/// (`configured_models`): what the tools and the Python module run.
+class localizer : public basic_localizer<configured_models> {
+ public:
+  using basic_localizer::basic_localizer;
+};
+
+/// The front door for a descriptor of your own (`descriptor_measurement<D>`): every capability
+/// of `localizer`, C++ only.
+///
+///     tacmap::descriptor_localizer<my_descriptor> loc(map, 0.2);  // D{} by default
+///     auto r = loc.touch(frame);
+template <descriptor D>
+using descriptor_localizer = basic_localizer<descriptor_measurement<D>>;
 
 }  // namespace tacmap
 

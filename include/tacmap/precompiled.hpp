@@ -10,7 +10,9 @@
 //  * rotated_descriptor_likelihood.hpp: rotated_descriptor_likelihood<sift_lite / classic_sift>
 //    and bayes_filter<pose_grid<float>, pose_odometry_gaussian,
 //    rotated_descriptor_likelihood<...>>.
-//  * localizer.hpp: planar_localizer_filter and pose_localizer_filter (the localizer's filters).
+//  * localizer.hpp: planar_localizer_filter and pose_localizer_filter (the filters of
+//    `tacmap::localizer`, the default instantiation of the generic `basic_localizer`; a
+//    `descriptor_localizer<D>` of a user's descriptor compiles its own where it is used).
 // Any other type works as before, compiled where it is used. The heavy members of these classes
 // are defined out of the class (not inline): GCC instantiates inline members of an `extern
 // template` anyway, to inline them, which would keep most of the cost.

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "gecko_protocol.hpp"
+#include "measurement/raw_patch_descriptor.hpp"
 #include "table_filter.hpp"
 #include "tacmap/sim/calibration.hpp"
 #include "tacmap/sim/experiment.hpp"
@@ -181,6 +182,37 @@ TEST_CASE("simulated gecko touches: the fit improves the log score and the claim
   const auto at_fit = cal.confidence_claims(fit.tau);
   CHECK(at_fit.probability.size() == fit.touches);
   CHECK(at_fit.said_and_right <= at_fit.said);
+}
+
+TEST_CASE("fit_tau fits a user's descriptor on a photograph, whatever the reference tau") {
+  // The gecko's map as "the user's photograph": 7 touch locations, 22 orders.
+  const tacmap::touch_protocol photo =
+      tacmap::photo_touch_protocol(gecko().map, gecko().mm_per_px, 5);
+  CHECK(photo.locations.size() == 7);
+  CHECK(photo.sequences.size() == 22);
+  tacmap::localization_config config;
+  config.features = tacmap::window_features::shared_dense;  // one field: fast to prepare
+  const tacmap::descriptor_measurement<tacmap_test::raw_patch> mine{};
+  const auto fit = tacmap::fit_tau({photo}, config, mine, {}, 6);
+  CHECK(fit.sequences == 6);
+  CHECK(fit.touches >= 30);
+  CHECK(fit.sane);
+  CHECK(fit.reference_tau == 0.15);  // the descriptor model's default: what it ran at
+  CHECK(fit.mean_log_score >= fit.mean_log_score_at_reference);
+  // Log-likelihoods are linear in 1 / tau: recorded at another temperature, the same fit. (A
+  // reference that is not the temperature the model ran at would scale the fit.)
+  config.tau = 0.6;
+  const auto again = tacmap::fit_tau({photo}, config, mine, {}, 6);
+  CHECK(again.reference_tau == 0.6);
+  CHECK(again.tau == doctest::Approx(fit.tau).epsilon(0.02));
+  // Another descriptor, another scale: raw pixels' distances are not SIFT's.
+  config.tau.reset();
+  config.model = tacmap::measurement_kind::lite;
+  const auto sift = tacmap::fit_tau({photo}, config, tacmap::configured_models{}, {}, 6);
+  CHECK(std::abs(std::log(sift.tau / fit.tau)) > 0.3);
+  config.headings = 4;
+  CHECK(message_of([&] { (void)tacmap::fit_tau({photo}, config, mine); }).find("headings = 4") !=
+        std::string::npos);
 }
 
 }  // namespace test_calibration

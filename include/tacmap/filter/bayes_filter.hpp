@@ -124,6 +124,17 @@ struct tracking_params {
   }
 };
 
+/// What `bayes_filter::update` throws when a touch gives zero probability to every state the
+/// predicted belief still allows (the measurement contradicts the prediction): the belief is
+/// unchanged and starting again from a uniform belief (`reset()`) is a sound response, which
+/// `basic_localizer` takes. A std::domain_error, as every failed update; the other failures (a
+/// likelihood that is NaN, +infinity or -infinity everywhere) are the model's, not the
+/// prediction's, and are not of this type: a restart would not cure them.
+class contradiction_error : public std::domain_error {
+ public:
+  using std::domain_error::domain_error;
+};
+
 /// What one measurement update reports.
 struct update_report {
   /// log of the normaliser eta^-1 = sum_x p(z | x) bel_bar(x), relative to the likelihood's
@@ -449,7 +460,7 @@ class bayes_filter {
         detail::weight_by_likelihood(belief_.data(), ll.data(), top, scratch_.data(), ll.size());
     const double total = sums.posterior;
     if (!(total > 0.0) || !std::isfinite(total))
-      detail::fail<std::domain_error>(
+      detail::fail<contradiction_error>(
           "bayes_filter::update: ", source, " gives zero probability to every state the belief ",
           "still allows (posterior sum ", total,
           "); the measurement contradicts the prediction. "

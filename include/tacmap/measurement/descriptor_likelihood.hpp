@@ -44,6 +44,7 @@
 
 #include "tacmap/descriptor/concept.hpp"
 #include "tacmap/detail/memory_budget.hpp"
+#include "tacmap/detail/type_name.hpp"
 #include "tacmap/executor/concept.hpp"
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/image.hpp"
@@ -204,6 +205,49 @@ inline std::vector<grid_cell> checked_patch_offsets(const char* who, const image
   return offsets;
 }
 
+/// Checks descriptors a `descriptor` D delivered (`values`: dimension() rows, `columns`
+/// columns expected) for what the models rely on: the right dimension and count, every value
+/// finite. `what` says what was described ("the map", "a tactile image", ...). Throws
+/// std::invalid_argument naming D and the offending value: a user's descriptor that returns
+/// NaN or a field of the wrong shape is refused where it happens, not found later as a NaN
+/// belief or an out-of-range read.
+template <class D, class Derived>
+void check_descriptors(const D& d, const Eigen::DenseBase<Derived>& values, Eigen::Index columns,
+                       const char* what) {
+  if (values.rows() != d.dimension() || values.cols() != columns)
+    fail("descriptor ", type_name<D>(), ": described ", what, " with ", values.cols(),
+         " descriptors of ", values.rows(), " values; expected ", columns,
+         " of dimension() = ", d.dimension(),
+         " values (descriptor/concept.hpp, requirement 4: one column of dimension() values per "
+         "patch position)");
+  // One vectorised sum finds any NaN or infinity (they propagate); only then (or when finite
+  // values overflow the sum) the element-wise scan, which names the first one: a check over
+  // every per-window descriptor of a map must cost little beside describing them.
+  if (std::isfinite(static_cast<double>(values.sum()))) return;
+  for (Eigen::Index c = 0; c < values.cols(); ++c)
+    for (Eigen::Index i = 0; i < values.rows(); ++i)
+      if (!std::isfinite(static_cast<double>(values(i, c))))
+        fail("descriptor ", type_name<D>(), ": described ", what, " with the value ", values(i, c),
+             " at element ", i, " of descriptor ", c,
+             "; expected finite values (descriptor/concept.hpp: a flat or dark patch must get a "
+             "finite descriptor too, e.g. all zeros)");
+}
+
+/// Checks a dense field D::compute returned for an image of `rows` x `cols` pixels: its
+/// positions (rows - patch + 1) x (cols - patch + 1), then its values (`check_descriptors`).
+template <class D, class T>
+void check_field(const D& d, const descriptor_field<T>& f, Eigen::Index rows, Eigen::Index cols,
+                 const char* what) {
+  const Eigen::Index p = d.patch_size();
+  if (f.rows != rows - p + 1 || f.cols != cols - p + 1 || f.values.cols() != f.rows * f.cols)
+    fail("descriptor ", type_name<D>(), ": compute() of ", what, " (", rows, " x ", cols,
+         " px) returned a field of ", f.rows, " x ", f.cols, " positions and ", f.values.cols(),
+         " columns; expected ", rows - p + 1, " x ", cols - p + 1,
+         " positions (image size - patch_size() + 1), one column each (descriptor/concept.hpp, "
+         "requirement 4)");
+  check_descriptors(d, f.values, f.rows * f.cols, what);
+}
+
 /// Checks a tactile image against the model's window: its size, then its pixels.
 inline void check_tactile_image(const char* who, const image<float>& z, pixel_size window) {
   if (z.rows() != window.height || z.cols() != window.width)
@@ -322,20 +366,18 @@ class descriptor_likelihood {
         if constexpr (detail::samples_into_workspace<Descriptor>) {
           if (scratch != nullptr) {
             descriptor_.sample(zt, scratch->workspace, scratch->samples);
-            TACMAP_ASSERT(scratch->samples.size() == patches_per_window(),
-                          "descriptor::sample returned the wrong number of patches");
             g = scratch->samples.values;  // grid order = offsets_ order (row-major, same spacing)
+            detail::check_descriptors(descriptor_, g, patches_per_window(), "a tactile image");
             return;
           }
         }
-        const auto samples = descriptor_.sample(zt);
-        TACMAP_ASSERT(samples.size() == patches_per_window(),
-                      "descriptor::sample returned the wrong number of patches");
-        g = samples.values;
+        g = descriptor_.sample(zt).values;
+        detail::check_descriptors(descriptor_, g, patches_per_window(), "a tactile image");
         return;
       }
     }
     const auto zf = descriptor_.compute(zt);
+    detail::check_field(descriptor_, zf, zt.rows(), zt.cols(), "a tactile image");
     g.resize(zf.values.rows(), patches_per_window());
     for (Eigen::Index m = 0; m < patches_per_window(); ++m)
       g.col(m) = zf.at(offsets_[static_cast<std::size_t>(m)].row,
@@ -950,8 +992,7 @@ descriptor_likelihood<Descriptor>::descriptor_likelihood(Descriptor descriptor,
   }
   const image<scalar_type> map_t = map.template cast<scalar_type>();
   field_ = descriptor_.compute(map_t);
-  TACMAP_ASSERT(field_.rows == map.rows() - p + 1 && field_.cols == map.cols() - p + 1,
-                "descriptor::compute returned a field of the wrong shape");
+  detail::check_field(descriptor_, field_, map.rows(), map.cols(), "the map");
   // Windows read field rows [0, rows_ + max offset row) only (the patches' offsets grow down
   // the window): the kernel skips the rest (6 of 103 rows for the paper's map).
   Eigen::Index last_offset_row = 0;
@@ -1025,6 +1066,8 @@ descriptor_likelihood<Descriptor>::descriptor_likelihood(Descriptor descriptor,
       descriptor_.describe_windows(
           map_t, window, std::span<const grid_cell>(offsets_),
           [&](Eigen::Index r, const descriptor_matrix& block) {
+            detail::check_descriptors(descriptor_, block, cols_ * m_count,
+                                      "a row of the map's windows (describe_windows)");
             for (Eigen::Index m = 0; m < m_count; ++m) {
               const Eigen::Map<const descriptor_matrix, 0, Eigen::OuterStride<>> patch(
                   block.data() + m * dim, dim, cols_, Eigen::OuterStride<>(m_count * dim));
@@ -1048,6 +1091,7 @@ descriptor_likelihood<Descriptor>::descriptor_likelihood(Descriptor descriptor,
       for (Eigen::Index c = 0; c < cols_; ++c) {
         cut = map_t.block(r, c, window.height, window.width);
         const auto wf = descriptor_.compute(cut);
+        detail::check_field(descriptor_, wf, window.height, window.width, "a window of the map");
         for (Eigen::Index m = 0; m < m_count; ++m) {
           const grid_cell o = offsets_[static_cast<std::size_t>(m)];
           if (quantized_) {

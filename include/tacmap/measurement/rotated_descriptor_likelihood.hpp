@@ -144,6 +144,7 @@ class rotated_descriptor_likelihood {
 
     const image<scalar_type> map_t = map.template cast<scalar_type>();
     const descriptor_field<scalar_type> field = descriptor_.compute(map_t);
+    detail::check_field(descriptor_, field, map.rows(), map.cols(), "the map");
     field_rows_ = field.rows;
     field_cols_ = field.cols;
     field_tiles_ = detail::descriptor_tiles<scalar_type>(field.values);
@@ -427,6 +428,8 @@ class rotated_descriptor_likelihood {
         store(descriptor_.describe_at(canvas, cells));
       } else {
         const auto f = descriptor_.compute(canvas);
+        detail::check_field(descriptor_, f, canvas.rows(), canvas.cols(),
+                            "a tactile image turned to a heading");
         for (Eigen::Index m = 0; m < m_count_; ++m) {
           const grid_cell c = h.canvas_top_left[static_cast<std::size_t>(m)];
           g.col(column(a, m)) = f.at(c.row, c.col);

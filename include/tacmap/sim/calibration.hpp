@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <concepts>
 #include <cstddef>
 #include <iterator>
 #include <limits>
@@ -440,5 +441,98 @@ class likelihood_calibration {
   std::vector<recorded> sequences_;
   mutable Eigen::Array<float, Eigen::Dynamic, 1> scaled_;
 };
+
+/// A protocol for calibrating on a photograph of the user's own: `photo` (intensities, row 0 at
+/// the top) at `mm_per_px`, `touches` distinct touch locations on the grid's states drawn from
+/// `seed`, 22 random orders of them, odometry = true motion + N(0, 0.5 mm) per axis (the gecko
+/// protocol's noise), a continuous 4 mm relief (height = intensity). What `tacmap-calibrate
+/// --photo` builds (after resizing the photograph to its `--map-px`). Throws
+/// std::invalid_argument for a photograph with fewer sensor positions than `touches`.
+[[nodiscard]] inline touch_protocol photo_touch_protocol(image<float> photo, double mm_per_px,
+                                                         std::uint64_t seed,
+                                                         std::size_t touches = 7) {
+  touch_protocol p;
+  p.map = std::move(photo);
+  p.mm_per_px = mm_per_px;
+  p.relief = {.kind = relief_kind::continuous,
+              .threshold = 0.5F,
+              .height_mm = 4.0,
+              .edge_smoothing_px = 0.0};
+  p.odometry_sigma_mm = 0.5;
+  p.seed = seed;
+  const planar_grid<float> grid(
+      p.map_size(), p.mm_per_px,
+      checked_tactile_window({}, mm_per_px, p.map_size(), "photo_touch_protocol"));
+  // Distinct locations are drawn until there are enough: a small map may not have that many.
+  if (static_cast<std::size_t>(grid.size()) < touches)
+    detail::fail("photo_touch_protocol: a ", p.map.cols(), " x ", p.map.rows(), " px map has ",
+                 grid.size(), " sensor positions, fewer than the ", touches,
+                 " distinct touches asked for; expected a larger map or fewer touches");
+  sim_rng rng(seed);
+  while (p.locations.size() < touches) {  // distinct states
+    const auto s = grid.state_mm(
+        static_cast<Eigen::Index>(rng.below(static_cast<std::uint64_t>(grid.size()))));
+    const touch_location loc{s(0), s(1)};
+    if (std::find(p.locations.begin(), p.locations.end(), loc) == p.locations.end())
+      p.locations.push_back(loc);
+  }
+  const std::size_t n = p.locations.size();
+  for (int q = 0; q < 22; ++q) {
+    std::vector<std::size_t> order(n);
+    for (std::size_t k = 0; k < n; ++k) order[k] = k;
+    for (std::size_t k = n - 1; k > 0; --k) std::swap(order[k], order[rng.below(k + 1)]);
+    p.sequences.push_back(sequence_visiting(p.locations, order, p.odometry_sigma_mm, rng));
+  }
+  return p;
+}
+
+/// Fits the temperature tau of the planar model of the measurement policy `measurement`
+/// (localizer.hpp: `configured_models`, or `descriptor_measurement<D>` for a descriptor of your
+/// own) on `maps` (your photographs as protocols, `photo_touch_protocol`, or recorded ones,
+/// `load_protocol`): every sequence (the first `sequences` of each map when > 0) is simulated
+/// under `config` (its scenario, simulator and seed; `localization_config`, sim/experiment.hpp),
+/// its log-likelihoods recorded at the reference tau (`config.tau`, else the model's default)
+/// and the log score maximised (`likelihood_calibration`). Three lines for your descriptor:
+///
+///     std::vector<tacmap::touch_protocol> maps{tacmap::photo_touch_protocol(photo, 0.5, 1)};
+///     const tacmap::tau_fit fit = tacmap::fit_tau(maps, {},
+///     tacmap::descriptor_measurement<my_descriptor>{}); if (fit.sane) config.tau = fit.tau;  //
+///     tacmap::localizer_config, for descriptor_localizer
+///
+/// Throws std::invalid_argument for headings > 0 (the fit is planar), no maps, or too few
+/// touches (`tau_fit_params`).
+template <localizer_measurement M = configured_models>
+[[nodiscard]] tau_fit fit_tau(const std::vector<touch_protocol>& maps,
+                              localization_config config = {}, M measurement = M{},
+                              const tau_fit_params& params = {}, std::size_t sequences = 0) {
+  if (config.headings != 0)
+    detail::fail("fit_tau: headings = ", config.headings,
+                 "; the fit is made on the planar model (headings = 0), whose tau the pose "
+                 "model shares");
+  if (maps.empty()) detail::fail("fit_tau: no maps; expected at least one protocol");
+  // The temperature the model runs at by default: the log-likelihoods are recorded there.
+  double reference = descriptor_likelihood_params{}.tau;
+  if (config.tau)
+    reference = *config.tau;
+  else if constexpr (std::same_as<M, configured_models>)
+    reference = config.planar_tau().value_or(reference);
+  config.tau = reference;
+  likelihood_calibration<planar_filter_for<M>> calibration(reference);
+  // Alive until the fit: the calibration keys its copies of the filters by address.
+  std::vector<std::unique_ptr<basic_localization_experiment<M>>> experiments;
+  for (const touch_protocol& p : maps) {
+    experiments.push_back(
+        std::make_unique<basic_localization_experiment<M>>(p, config, measurement));
+    auto& experiment = *experiments.back();
+    const std::size_t n =
+        sequences == 0 ? p.sequences.size() : std::min(p.sequences.size(), sequences);
+    for (std::size_t q = 0; q < n; ++q) {
+      const auto run = experiment.run(q, false, true);
+      calibration.add(experiment.filter(), p.sequences[q], run,
+                      static_cast<Eigen::Index>(run.raised_dark ? 1 : 0));
+    }
+  }
+  return calibration.fit(params);
+}
 
 }  // namespace tacmap

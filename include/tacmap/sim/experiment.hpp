@@ -272,17 +272,24 @@ struct sequence_result {
 /// (`object_relief`): raised parts bright (+1) or dark (-1), drawn per sequence when the
 /// polarity is random. Each polarity has its own relief and camera map (the shading of its
 /// walls), so the experiment keeps one filter per polarity it meets (at most two).
-class localization_experiment {
+///
+/// Generic over the localizer's measurement policy (localizer.hpp): `localization_experiment`
+/// runs the shipped models (`configured_models`), `basic_localization_experiment<
+/// descriptor_measurement<D>>` a user's descriptor (what `fit_tau`, sim/calibration.hpp, runs).
+template <localizer_measurement Measurement>
+class basic_localization_experiment {
  public:
-  using filter_type = planar_localizer_filter;
-  using pose_filter_type = pose_localizer_filter;
+  using filter_type = planar_filter_for<Measurement>;
+  using pose_filter_type = pose_filter_for<Measurement>;
 
   /// Throws std::invalid_argument for a protocol whose map is empty or smaller than the sensor's
   /// window, or for out-of-range or contradictory configuration values (named by the component
   /// that checks them).
-  localization_experiment(const touch_protocol& protocol, localization_config config)
+  basic_localization_experiment(const touch_protocol& protocol, localization_config config,
+                                Measurement measurement = Measurement{})
       : protocol_(&protocol),
         config_(std::move(config)),
+        measurement_(std::move(measurement)),
         window_(checked_tactile_window(config_.simulator.geometry, protocol.mm_per_px,
                                        protocol.map_size(), "localization_experiment")),
         margin_px_(config_.scenario.moves_sensor() || config_.random_orientation
@@ -332,9 +339,11 @@ class localization_experiment {
       dark = polarity_rng.uniform() < 0.5;
     }
     polarity_setup& v = *variants_[dark ? 1 : 0];
-    sequence_result result =
-        v.filter ? run_on(*v.filter, v, index, keep_images, keep_log_likelihoods)
-                 : run_on(*v.pose_filter, v, index, keep_images, keep_log_likelihoods);
+    sequence_result result;
+    if (v.filter)
+      result = run_on(*v.filter, v, index, keep_images, keep_log_likelihoods);
+    else if constexpr (localizes_headings<Measurement>)
+      result = run_on(*v.pose_filter, v, index, keep_images, keep_log_likelihoods);
     result.raised_dark = dark;
     return result;
   }
@@ -364,9 +373,14 @@ class localization_experiment {
     v.pressed_relief = margin_px_ > 0 ? padded(v.relief, margin_px_) : v.relief;
     // The filter a `localizer` with this configuration runs on this map.
     if (config_.headings == 0)
-      v.filter.emplace(make_planar_filter(config_, v.visual_map, protocol_->mm_per_px, window_));
+      v.filter.emplace(
+          make_planar_filter(measurement_, config_, v.visual_map, protocol_->mm_per_px, window_));
+    else if constexpr (localizes_headings<Measurement>)
+      v.pose_filter.emplace(
+          make_pose_filter(measurement_, config_, v.visual_map, protocol_->mm_per_px, window_));
     else
-      v.pose_filter.emplace(make_pose_filter(config_, v.visual_map, protocol_->mm_per_px, window_));
+      detail::fail("localization_experiment: headings = ", config_.headings,
+                   ", but the measurement policy has no (x, y, theta) model; use headings = 0");
     variants_[which].emplace(std::move(v));
   }
 
@@ -614,9 +628,16 @@ class localization_experiment {
 
   const touch_protocol* protocol_;
   localization_config config_;
+  Measurement measurement_;
   pixel_size window_;
   Eigen::Index margin_px_;
   std::array<std::optional<polarity_setup>, 2> variants_;  // [0]: raised bright, [1]: raised dark
+};
+
+/// The experiment with the shipped models (`configured_models`): what tacmap-evaluate runs.
+class localization_experiment : public basic_localization_experiment<configured_models> {
+ public:
+  using basic_localization_experiment::basic_localization_experiment;
 };
 
 }  // namespace tacmap

@@ -152,9 +152,16 @@ TEST_CASE_TEMPLATE_DEFINE("tacmap descriptor conformance", D, tacmap_descriptor_
       for (std::size_t i = 0; i < perm.size(); ++i) {
         REQUIRE(perm[i] >= 0);
         REQUIRE(perm[i] < d.dimension());
-        CHECK(perm[i] != static_cast<Eigen::Index>(i));  // no fixed point
-        CHECK(perm[static_cast<std::size_t>(perm[i])] ==
-              static_cast<Eigen::Index>(i));  // involution
+        CHECK_MESSAGE(perm[i] != static_cast<Eigen::Index>(i),
+                      "contrast_permutation() keeps element "
+                          << i
+                          << " in place: inverting the "
+                             "contrast must move every element");
+        CHECK_MESSAGE(perm[static_cast<std::size_t>(perm[i])] == static_cast<Eigen::Index>(i),
+                      "contrast_permutation() is inconsistent: inverting twice is not the "
+                      "identity (element "
+                          << i << " -> " << perm[i] << " -> "
+                          << perm[static_cast<std::size_t>(perm[i])] << ")");
       }
       const tacmap::image<T> img = tacmap::testing::conformance_image(36, 31, 6).template cast<T>();
       const tacmap::image<T> inverted = (img.maxCoeff() + img.minCoeff()) - img;
