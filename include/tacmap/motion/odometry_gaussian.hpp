@@ -36,6 +36,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "tacmap/detail/mass_sum.hpp"
 #include "tacmap/detail/weighted_sum.hpp"
 #include "tacmap/grid/concept.hpp"
 #include "tacmap/image.hpp"
@@ -136,8 +137,10 @@ void shifted_accumulate(const Eigen::Map<const image<T>>& in, Eigen::Map<image<T
 /// motion) and `out` is garbage; the filter then keeps its belief.
 template <class Array, class Fail>
 prediction_report renormalise_prediction(const Array& in, Array& out, const Fail& nothing_left) {
-  const double kept = static_cast<double>(out.sum());
-  const double before = static_cast<double>(in.sum());
+  // In double over short float chunks (mass_sum.hpp): a flat float sum of a 16-million-state
+  // prediction came to 0.981.
+  const double kept = mass_sum(out);
+  const double before = mass_sum(in);
   if (!(kept > 0.0) || !std::isfinite(kept)) nothing_left();
   out *= static_cast<typename Array::Scalar>(1.0 / kept);
   return {std::clamp(1.0 - kept / before, 0.0, 1.0)};

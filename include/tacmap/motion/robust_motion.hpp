@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "tacmap/config.hpp"
+#include "tacmap/detail/mass_sum.hpp"
 #include "tacmap/grid/concept.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/motion/concept.hpp"
@@ -244,9 +245,9 @@ class robust_motion {
       for (Eigen::Index layer = 0; layer < layers; ++layer) {
         const Eigen::Map<const Eigen::Array<scalar, Eigen::Dynamic, 1>> row(
             b.data() + layer * plane + i * cols, cols);
-        // The plane's mass a row at a time: a sum in the row's own precision (vectorised; a
-        // sum of casts is a chain of dependent adds), added up in double.
-        broad_mass_[static_cast<std::size_t>(layer)] += static_cast<double>(row.sum());
+        // The plane's mass a row at a time: short chunks in the row's own precision
+        // (vectorised; a sum of casts is a chain of dependent adds), added up in double.
+        broad_mass_[static_cast<std::size_t>(layer)] += detail::mass_sum(row);
         block_row_ += row.template cast<double>();
       }
       const auto y0 = y_lo_[static_cast<std::size_t>(i)];
@@ -385,17 +386,24 @@ class robust_motion {
     void operator()(float s, Eigen::Index c) const { out[c] = s; }
   };
   // ... or mixed into the belief's row, o = keep o + scale s, and the row's new mass summed
-  // (a register of partial sums, then in double).
+  // (a register of partial sums, moved to double every `mass_sum_chunk_batches` registers so
+  // that a long row's lanes do not grow far above what they add: see mass_sum.hpp).
   struct mix_sink {
     float* out;
     float keep, scale;
     float_batch acc = float_batch(0.0F);
     double rest = 0.0;
+    Eigen::Index pending = 0;
     void operator()(const float_batch& s, Eigen::Index c) {
       const float_batch o =
           xsimd::fma(float_batch::load_unaligned(out + c), float_batch(keep), s * scale);
       o.store_unaligned(out + c);
       acc += o;
+      if (++pending == detail::mass_sum_chunk_batches) {
+        rest += static_cast<double>(xsimd::hadd(acc));
+        acc = float_batch(0.0F);
+        pending = 0;
+      }
     }
     void operator()(float s, Eigen::Index c) {
       out[c] = out[c] * keep + s * scale;
