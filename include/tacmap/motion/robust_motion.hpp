@@ -34,6 +34,7 @@
 
 #include "tacmap/config.hpp"
 #include "tacmap/detail/mass_sum.hpp"
+#include "tacmap/detail/setting_ranges.hpp"
 #include "tacmap/grid/concept.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/motion/concept.hpp"
@@ -66,18 +67,18 @@ struct robust_motion_params {
       detail::fail("robust_motion_params: wide_probability = ", wide_probability,
                    " (with lost_probability ", lost_probability,
                    "); expected >= 0 with the two summing to less than 1 (e.g. 0.1)");
-    if (!(std::isfinite(wide_sigma_mm) && wide_sigma_mm > 0.0 && wide_sigma_mm <= 100.0))
-      detail::fail("robust_motion_params: wide_sigma_mm = ", wide_sigma_mm,
-                   "; expected a spread in (0, 100] mm (e.g. 4)");
+    detail::check_range("robust_motion_params", "wide_sigma_mm", wide_sigma_mm,
+                        detail::min_sigma_mm, 100.0, " mm", "the wide component's spread",
+                        "give it in millimetres (e.g. 3)");
     if (!(std::isfinite(broad_probability) && broad_probability >= 0.0 &&
           broad_probability + wide_probability + lost_probability < 1.0))
       detail::fail("robust_motion_params: broad_probability = ", broad_probability,
                    " (with wide_probability ", wide_probability, " and lost_probability ",
                    lost_probability,
                    "); expected >= 0 with the three summing to less than 1 (e.g. 0.05)");
-    if (!(std::isfinite(broad_sigma_mm) && broad_sigma_mm > 0.0 && broad_sigma_mm <= 1000.0))
-      detail::fail("robust_motion_params: broad_sigma_mm = ", broad_sigma_mm,
-                   "; expected a spread in (0, 1000] mm (e.g. 10)");
+    detail::check_range("robust_motion_params", "broad_sigma_mm", broad_sigma_mm,
+                        detail::min_sigma_mm, 1000.0, " mm", "the broad component's spread",
+                        "give it in millimetres (e.g. 10)");
   }
 };
 
@@ -305,7 +306,9 @@ class robust_motion {
                               std::pair<Eigen::Index, double>& key) {
     if (key.first == n && key.second == sigma && m.rows() == n) return;
     m.setZero(n, n);
-    if (sigma <= 0.0) {
+    // sigma^2 = 0 (a spread far below a block, e.g. on a grid of metre-sized pixels): no blur;
+    // 0 / 0 at the centre would be NaN.
+    if (!(sigma * sigma > 0.0)) {
       m.setIdentity();
     } else {
       const auto reach = static_cast<Eigen::Index>(std::ceil(3.0 * sigma)) + 1;

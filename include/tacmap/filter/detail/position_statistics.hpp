@@ -227,12 +227,16 @@ class position_statistics {
     for (Eigen::Index at = 0; at < b.size(); at += plane)
       p_flat += view_type(b.data() + at, plane).template cast<double>();
     const double sx = std::abs(lattice_step_(0)), sy = std::abs(lattice_step_(1));
-    const auto reach_r = static_cast<Eigen::Index>(std::floor(radius_mm / sy + 1e-9));
+    // Reaches clamped to the grid (a disc wider than the grid covers all of it): a radius of
+    // 1e300 mm would otherwise overflow the integer conversion.
+    const auto reach_r = static_cast<Eigen::Index>(
+        std::min(std::floor(radius_mm / sy + 1e-9), static_cast<double>(rows)));
     std::vector<Eigen::Index> half(static_cast<std::size_t>(reach_r + 1));
     for (Eigen::Index dr = 0; dr <= reach_r; ++dr) {
       const double dy = static_cast<double>(dr) * sy;
-      half[static_cast<std::size_t>(dr)] = static_cast<Eigen::Index>(
-          std::floor(std::sqrt(std::max(0.0, radius_mm * radius_mm - dy * dy)) / sx + 1e-9));
+      half[static_cast<std::size_t>(dr)] = static_cast<Eigen::Index>(std::min(
+          std::floor(std::sqrt(std::max(0.0, radius_mm * radius_mm - dy * dy)) / sx + 1e-9),
+          static_cast<double>(cols)));
     }
     const Eigen::Index pad = half[0];
     image<double>& prefix = disc_prefix_;  // prefix(r, pad + j) = sum of p(r, 0..j-1)
