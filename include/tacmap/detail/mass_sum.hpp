@@ -7,8 +7,9 @@
 // or 1.034 (SSE2), and a prediction to 0.981 (issue 37). Here the lanes add only a short chunk
 // (16 registers: at most 4 values per lane, then a tree), each chunk's total is rounded once to
 // float and added in double: the relative error is that of a 16-register chunk, whatever the
-// size. The cost is one horizontal add per chunk, a few percent of a plain float sum (measured
-// in bench/filter_bench.cpp, BM_belief_sum).
+// size. The cost is one horizontal add per chunk; with four accumulators it is faster than
+// Eigen's flat float sum (bench/filter_bench.cpp, belief_sum, AVX2, a loaded machine, medians
+// of 5: 1.5 against 2.6 us at the paper's 8,137 states, 18.5 against 21.7 ms at 16 million).
 #pragma once
 
 #include <Eigen/Core>
