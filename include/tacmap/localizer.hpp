@@ -31,6 +31,7 @@
 #include "tacmap/descriptor/dense_sift.hpp"
 #include "tacmap/descriptor/unsigned_orientation.hpp"
 #include "tacmap/detail/memory_budget.hpp"
+#include "tacmap/detail/setting_ranges.hpp"
 #include "tacmap/detail/type_name.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/filter/confidence.hpp"
@@ -130,13 +131,14 @@ struct localizer_config {
   /// Temperature: exponential shape (descriptor distance units) or NCC (log p = ncc / tau).
   /// Empty: `default_classic_tau` for the planar classic_sift model with the exponential shape
   /// (the default), else the model's own default (descriptor 0.15, NCC 0.1); see `planar_tau()`.
+  /// In [1e-6, 1e6] (detail::min_tau, max_tau): the float log-likelihood stays finite.
   std::optional<double> tau;
   /// Pixels between the tactile image's descriptor patches (descriptor models). Empty:
   /// `default_classic_spacing` for the planar classic_sift model (the default), else the
   /// paper's 9 (`descriptor_likelihood_params::spacing`); see `planar_patch_spacing()`.
   std::optional<Eigen::Index> patch_spacing;
-  double tempering = 1.0;             ///< exponent on the likelihood
-  double motion_sigma_mm = 1.0;       ///< odometry_gaussian sigma (Sec. III-B)
+  double tempering = 1.0;             ///< exponent on the likelihood, in [0, 1e3]
+  double motion_sigma_mm = 1.0;       ///< odometry_gaussian sigma (Sec. III-B), [1e-3, 1e6] mm
   int motion_k = 8;                   ///< odometry_gaussian neighbours (paper: 8)
   preprocess_params preprocessing{};  ///< frame thresholds; mm_per_px is replaced by the map's
   /// When the verdict is "localized" or "contradicted" (`assess`).
@@ -145,7 +147,7 @@ struct localizer_config {
   /// N >= 1 localizes over (x, y, theta) with a `pose_grid` of N headings, the
   /// `rotated_descriptor_likelihood` (descriptor models only) and sensor-frame odometry.
   int headings = 0;
-  double turn_sigma_rad = 0.0873;  ///< pose motion: turn noise (headings > 0)
+  double turn_sigma_rad = 0.0873;  ///< pose motion: turn noise (headings > 0), [1e-6, 1e6] rad
   /// How the map's brightness relates to height (see `appearance_handling`).
   /// Default: latent, the best measured (README, "The photo is not the touch").
   appearance_handling appearance = appearance_handling::latent;
@@ -255,18 +257,42 @@ struct localizer_config {
     return appearance_switch.value_or(default_appearance_switch);
   }
 
-  /// Throws std::invalid_argument for settings that contradict each other, naming both.
+  /// Throws std::invalid_argument for settings that contradict each other, naming both, and for
+  /// every numeric setting outside the range in which its model stays finite (the range named:
+  /// tacmap/detail/setting_ranges.hpp), before anything is prepared.
   void validate() const {
     confidence.validate();
-    if (!(std::isfinite(motion_sigma_mm) && motion_sigma_mm > 0.0))
-      detail::fail("localizer_config: motion_sigma_mm = ", motion_sigma_mm,
-                   "; expected the odometry's noise per axis, a finite value > 0 mm (e.g. 1)");
+    detail::check_range("localizer_config", "motion_sigma_mm", motion_sigma_mm,
+                        detail::min_sigma_mm, detail::max_sigma_mm, " mm",
+                        "the odometry's noise per axis", "the paper uses 1");
     if (motion_k <= 0)
       detail::fail("localizer_config: motion_k = ", motion_k,
                    "; expected a number of neighbours > 0 (the paper: 8)");
+    (void)odometry_gaussian({.sigma_mm = motion_sigma_mm, .k = motion_k});  // k: a whole disc
     if (headings < 0)
       detail::fail("localizer_config: headings = ", headings,
                    "; expected 0 (known orientation) or the number of headings of a pose grid");
+    if (headings > 0)
+      detail::check_range("localizer_config", "turn_sigma_rad", turn_sigma_rad,
+                          detail::min_sigma_rad, detail::max_sigma_rad, " rad",
+                          "the turn noise per move", "the default is 0.0873 (5 degrees)");
+    if (tau)
+      detail::check_range("localizer_config", "tau", *tau, detail::min_tau, detail::max_tau,
+                          " (descriptor distance units; NCC: log p = ncc / tau)",
+                          "the likelihood's temperature",
+                          "leave it empty for the model's fitted default");
+    detail::check_range("localizer_config", "tempering", tempering, 0.0, detail::max_tempering, "",
+                        "an exponent on the likelihood",
+                        "1 is the likelihood itself, 0 ignores the touches");
+    if (patch_spacing && *patch_spacing <= 0)
+      detail::fail("localizer_config: patch_spacing = ", *patch_spacing,
+                   "; expected a positive number of pixels between tactile patches (paper: 9), "
+                   "or empty for the model's default");
+    {
+      preprocess_params p = preprocessing;  // mm_per_px is replaced by the map's
+      p.mm_per_px = 1.0;
+      p.validate();
+    }
     robust_motion_params{.lost_probability = lost(),
                          .wide_probability = wide(),
                          .wide_sigma_mm = wide_sigma_mm,

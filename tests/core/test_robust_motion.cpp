@@ -362,7 +362,8 @@ TEST_CASE("robust_motion: the broad component follows the position marginal, per
         std::string::npos);
   CHECK(message_of([&] {
           tacmap::robust_motion<identity>({}, {.broad_probability = 0.1, .broad_sigma_mm = 0.0});
-        }).find("broad_sigma_mm = 0; expected a spread in (0, 1000] mm") != std::string::npos);
+        }).find("broad_sigma_mm = 0; expected the broad component's spread in [0.001, 1000] mm") !=
+        std::string::npos);
 }
 
 TEST_CASE("robust_motion: the broad component at the grid's ends keeps what a Gaussian keeps") {

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "tacmap/angle.hpp"
+#include "tacmap/detail/mass_sum.hpp"
 #include "tacmap/executor/concept.hpp"
 #include "tacmap/filter/detail/position_statistics.hpp"
 #include "tacmap/filter/detail/posterior_kernel.hpp"
@@ -244,7 +245,7 @@ class bayes_filter {
       if (!(std::isfinite(scratch_(i)) && scratch_(i) >= 0))
         detail::fail("bayes_filter::set_prior: prior value ", scratch_(i), " at state ", i,
                      "; expected finite probabilities >= 0");
-    const double total = static_cast<double>(scratch_.sum());
+    const double total = detail::mass_sum(scratch_);
     if (!(total > 0.0 && std::isfinite(total)))
       detail::fail("bayes_filter::set_prior: the prior sums to ", total,
                    "; expected a positive, finite total (it is normalised for you)");
@@ -505,7 +506,7 @@ class bayes_filter {
       return;
     }
     b /= b.maxCoeff();
-    b /= b.sum();
+    b *= static_cast<scalar_type>(1.0 / detail::mass_sum(b));
   }
 
   Grid grid_;
@@ -611,7 +612,8 @@ prediction_report bayes_filter<Grid, Motion, Measurement>::predict(const control
   region_.reset();
   const prediction_report report = motion_.predict(grid_, belief_, scratch_, u);
   // A user's motion model that breaks its contract must not poison the belief.
-  const double total = static_cast<double>(scratch_.sum());
+  // In double over short float chunks (mass_sum.hpp), as every sum of a whole belief.
+  const double total = detail::mass_sum(scratch_);
   if (!(std::isfinite(total) && total > 0.0) || scratch_.minCoeff() < 0)
     detail::fail<std::logic_error>(
         "bayes_filter::predict: the motion model returned a belief summing to ", total,

@@ -44,6 +44,7 @@
 
 #include "tacmap/descriptor/concept.hpp"
 #include "tacmap/detail/memory_budget.hpp"
+#include "tacmap/detail/setting_ranges.hpp"
 #include "tacmap/detail/type_name.hpp"
 #include "tacmap/executor/concept.hpp"
 #include "tacmap/grid/planar_grid.hpp"
@@ -122,7 +123,7 @@ struct descriptor_likelihood_params {
   /// use, seed 101: 0.152), at which the belief's P(error <= 5 mm) is calibrated (README,
   /// "Confidence"); 0.25 before, underconfident by 13-16 points.
   double tau = 0.15;
-  double tempering = 1.0;                         ///< exponent on the likelihood, >= 0
+  double tempering = 1.0;                         ///< exponent on the likelihood, [0, 1e3]
   contrast_sign contrast = contrast_sign::as_is;  ///< paper: as_is; either_per_patch: aligned only
   /// Prepare for `log_likelihood_both_signs` (the appearance hypotheses of
   /// `appearance_likelihood`): the map's descriptors are stored in the sum/difference basis of
@@ -149,14 +150,16 @@ struct descriptor_likelihood_params {
     if (spacing <= 0)
       detail::fail("descriptor_likelihood_params: spacing = ", spacing,
                    "; expected a positive number of pixels between tactile patches (paper: 9)");
-    if (!(std::isfinite(epsilon) && epsilon > 0.0))
-      detail::fail("descriptor_likelihood_params: epsilon = ", epsilon,
-                   "; expected a finite guard > 0 (eq. (2) is unbounded as d -> 0)");
-    if (!(std::isfinite(tau) && tau > 0.0))
-      detail::fail("descriptor_likelihood_params: tau = ", tau, "; expected a finite value > 0");
-    if (!(std::isfinite(tempering) && tempering >= 0.0))
-      detail::fail("descriptor_likelihood_params: tempering = ", tempering,
-                   "; expected a finite exponent >= 0");
+    // The ranges keep the float log-likelihood finite (setting_ranges.hpp).
+    detail::check_range("descriptor_likelihood_params", "epsilon", epsilon, detail::min_epsilon,
+                        detail::max_epsilon, "", "eq. (2)'s guard (it is unbounded as d -> 0)",
+                        "the default is 1e-3");
+    detail::check_range("descriptor_likelihood_params", "tau", tau, detail::min_tau,
+                        detail::max_tau, " (descriptor distance units)", "a temperature",
+                        "fit it with tacmap-calibrate, or keep the default 0.15");
+    detail::check_range("descriptor_likelihood_params", "tempering", tempering, 0.0,
+                        detail::max_tempering, "", "an exponent on the likelihood",
+                        "1 is the likelihood itself, 0 ignores the touches");
     if (contrast == contrast_sign::either_per_patch && pairs == pairing::all_pairs)
       detail::fail(
           "descriptor_likelihood_params: contrast = either_per_patch with pairs = all_pairs; "

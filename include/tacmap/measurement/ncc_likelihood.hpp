@@ -15,6 +15,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "tacmap/detail/setting_ranges.hpp"
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/measurement/concept.hpp"
@@ -27,10 +28,12 @@ struct ncc_params {
   double tempering = 1.0;  ///< exponent on the likelihood (multiplies the log-likelihood)
 
   void validate() const {
-    if (!(std::isfinite(tau) && tau > 0.0))
-      detail::fail("ncc_params: tau = ", tau, "; expected a finite temperature > 0");
-    if (!(std::isfinite(tempering) && tempering >= 0.0))
-      detail::fail("ncc_params: tempering = ", tempering, "; expected a finite exponent >= 0");
+    // The ranges keep the float log-likelihood tempering ncc / tau finite (setting_ranges.hpp).
+    detail::check_range("ncc_params", "tau", tau, detail::min_tau, detail::max_tau, "",
+                        "a temperature", "smaller is more decisive; the default is 0.1");
+    detail::check_range("ncc_params", "tempering", tempering, 0.0, detail::max_tempering, "",
+                        "an exponent on the likelihood",
+                        "1 is the likelihood itself, 0 ignores the touches");
   }
 };
 

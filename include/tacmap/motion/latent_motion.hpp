@@ -25,6 +25,7 @@
 #include <utility>
 #include <vector>
 
+#include "tacmap/detail/mass_sum.hpp"
 #include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/motion/concept.hpp"
 #include "tacmap/motion/detail/block_prediction.hpp"
@@ -96,7 +97,7 @@ class latent_motion {
       for (Eigen::Index h = 0; h < hypotheses; ++h)
         out.segment(h * n, n) = stay * out.segment(h * n, n) + move * total;
     }
-    out *= static_cast<T>(1.0 / static_cast<double>(out.sum()));
+    out *= static_cast<T>(1.0 / detail::mass_sum(out));
     return {std::clamp(1.0 - m.kept / m.before, 0.0, 1.0)};
   }
 

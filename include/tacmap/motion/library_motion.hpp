@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "tacmap/detail/mass_sum.hpp"
 #include "tacmap/grid/library_grid.hpp"
 #include "tacmap/motion/concept.hpp"
 #include "tacmap/motion/detail/block_prediction.hpp"
@@ -61,7 +62,7 @@ class library_motion {
           return per_object_[static_cast<std::size_t>(k)].predict(grid.object(k), block, moved, u);
         },
         in, out, kept_, "library_motion", "objects");
-    out *= static_cast<T>(1.0 / static_cast<double>(out.sum()));
+    out *= static_cast<T>(1.0 / detail::mass_sum(out));
     return {std::clamp(1.0 - m.kept / m.before, 0.0, 1.0)};
   }
 

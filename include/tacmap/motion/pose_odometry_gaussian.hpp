@@ -67,13 +67,14 @@ class pose_odometry_gaussian {
   using control_type = sensor_odometry;
 
   /// Throws std::invalid_argument for a translation sigma or k that `odometry_gaussian` rejects,
-  /// or a turn sigma that is not finite and > 0.
+  /// or a turn sigma outside [1e-6, 1e6] rad (detail::min_sigma_rad, max_sigma_rad).
   explicit pose_odometry_gaussian(pose_odometry_gaussian_params params = {})
       : params_(params),
         planar_({.sigma_mm = params.sigma_mm, .k = params.k, .boundary = params.boundary}) {
-    if (!(std::isfinite(params.sigma_rad) && params.sigma_rad > 0.0))
-      detail::fail("pose_odometry_gaussian: sigma_rad = ", params.sigma_rad,
-                   "; expected a finite turn noise > 0 radians (e.g. 0.0873 = 5 degrees)");
+    detail::check_range("pose_odometry_gaussian", "sigma_rad", params.sigma_rad,
+                        detail::min_sigma_rad, detail::max_sigma_rad, " rad",
+                        "the turn noise's standard deviation",
+                        "give it in radians (e.g. 0.0873 = 5 degrees)");
   }
 
   [[nodiscard]] const pose_odometry_gaussian_params& params() const { return params_; }
@@ -297,14 +298,17 @@ class pose_odometry_gaussian {
     const auto radius = static_cast<Eigen::Index>(
         std::min<double>(std::ceil(3.0 * sigma_steps), static_cast<double>(layers)));
     std::vector<double> tap(static_cast<std::size_t>(layers), 0.0);  // weight per offset mod L
+    // Exactly 1 at j = 0: a turn noise far below a step would make 0 / 0 there.
+    const auto gauss = [sigma_steps](Eigen::Index j) {
+      return j == 0 ? 1.0
+                    : std::exp(-0.5 * static_cast<double>(j * j) / (sigma_steps * sigma_steps));
+    };
     double norm = 0.0;
-    for (Eigen::Index j = -radius; j <= radius; ++j)
-      norm += std::exp(-0.5 * static_cast<double>(j * j) / (sigma_steps * sigma_steps));
+    for (Eigen::Index j = -radius; j <= radius; ++j) norm += gauss(j);
     const auto base = static_cast<Eigen::Index>(whole);
     const auto wrap = [layers](Eigen::Index o) { return ((o % layers) + layers) % layers; };
     for (Eigen::Index j = -radius; j <= radius; ++j) {
-      const double g =
-          std::exp(-0.5 * static_cast<double>(j * j) / (sigma_steps * sigma_steps)) / norm;
+      const double g = gauss(j) / norm;
       tap[static_cast<std::size_t>(wrap(j + base))] += g * (1.0 - frac);
       tap[static_cast<std::size_t>(wrap(j + base + 1))] += g * frac;
     }

@@ -33,6 +33,8 @@
 #include <vector>
 
 #include "tacmap/config.hpp"
+#include "tacmap/detail/mass_sum.hpp"
+#include "tacmap/detail/setting_ranges.hpp"
 #include "tacmap/grid/concept.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/motion/concept.hpp"
@@ -65,18 +67,18 @@ struct robust_motion_params {
       detail::fail("robust_motion_params: wide_probability = ", wide_probability,
                    " (with lost_probability ", lost_probability,
                    "); expected >= 0 with the two summing to less than 1 (e.g. 0.1)");
-    if (!(std::isfinite(wide_sigma_mm) && wide_sigma_mm > 0.0 && wide_sigma_mm <= 100.0))
-      detail::fail("robust_motion_params: wide_sigma_mm = ", wide_sigma_mm,
-                   "; expected a spread in (0, 100] mm (e.g. 4)");
+    detail::check_range("robust_motion_params", "wide_sigma_mm", wide_sigma_mm,
+                        detail::min_sigma_mm, 100.0, " mm", "the wide component's spread",
+                        "give it in millimetres (e.g. 3)");
     if (!(std::isfinite(broad_probability) && broad_probability >= 0.0 &&
           broad_probability + wide_probability + lost_probability < 1.0))
       detail::fail("robust_motion_params: broad_probability = ", broad_probability,
                    " (with wide_probability ", wide_probability, " and lost_probability ",
                    lost_probability,
                    "); expected >= 0 with the three summing to less than 1 (e.g. 0.05)");
-    if (!(std::isfinite(broad_sigma_mm) && broad_sigma_mm > 0.0 && broad_sigma_mm <= 1000.0))
-      detail::fail("robust_motion_params: broad_sigma_mm = ", broad_sigma_mm,
-                   "; expected a spread in (0, 1000] mm (e.g. 10)");
+    detail::check_range("robust_motion_params", "broad_sigma_mm", broad_sigma_mm,
+                        detail::min_sigma_mm, 1000.0, " mm", "the broad component's spread",
+                        "give it in millimetres (e.g. 10)");
   }
 };
 
@@ -244,9 +246,9 @@ class robust_motion {
       for (Eigen::Index layer = 0; layer < layers; ++layer) {
         const Eigen::Map<const Eigen::Array<scalar, Eigen::Dynamic, 1>> row(
             b.data() + layer * plane + i * cols, cols);
-        // The plane's mass a row at a time: a sum in the row's own precision (vectorised; a
-        // sum of casts is a chain of dependent adds), added up in double.
-        broad_mass_[static_cast<std::size_t>(layer)] += static_cast<double>(row.sum());
+        // The plane's mass a row at a time: short chunks in the row's own precision
+        // (vectorised; a sum of casts is a chain of dependent adds), added up in double.
+        broad_mass_[static_cast<std::size_t>(layer)] += detail::mass_sum(row);
         block_row_ += row.template cast<double>();
       }
       const auto y0 = y_lo_[static_cast<std::size_t>(i)];
@@ -304,7 +306,9 @@ class robust_motion {
                               std::pair<Eigen::Index, double>& key) {
     if (key.first == n && key.second == sigma && m.rows() == n) return;
     m.setZero(n, n);
-    if (sigma <= 0.0) {
+    // sigma^2 = 0 (a spread far below a block, e.g. on a grid of metre-sized pixels): no blur;
+    // 0 / 0 at the centre would be NaN.
+    if (!(sigma * sigma > 0.0)) {
       m.setIdentity();
     } else {
       const auto reach = static_cast<Eigen::Index>(std::ceil(3.0 * sigma)) + 1;
@@ -385,17 +389,24 @@ class robust_motion {
     void operator()(float s, Eigen::Index c) const { out[c] = s; }
   };
   // ... or mixed into the belief's row, o = keep o + scale s, and the row's new mass summed
-  // (a register of partial sums, then in double).
+  // (a register of partial sums, moved to double every `mass_sum_chunk_batches` registers so
+  // that a long row's lanes do not grow far above what they add: see mass_sum.hpp).
   struct mix_sink {
     float* out;
     float keep, scale;
     float_batch acc = float_batch(0.0F);
     double rest = 0.0;
+    Eigen::Index pending = 0;
     void operator()(const float_batch& s, Eigen::Index c) {
       const float_batch o =
           xsimd::fma(float_batch::load_unaligned(out + c), float_batch(keep), s * scale);
       o.store_unaligned(out + c);
       acc += o;
+      if (++pending == detail::mass_sum_chunk_batches) {
+        rest += static_cast<double>(xsimd::hadd(acc));
+        acc = float_batch(0.0F);
+        pending = 0;
+      }
     }
     void operator()(float s, Eigen::Index c) {
       out[c] = out[c] * keep + s * scale;

@@ -91,10 +91,29 @@ struct preprocessed_frame {
   }
 };
 
+/// The most map pixels a side of the sensor's window may span (a 65,536 px side is a 16 GB
+/// float image): beyond it a scale is a unit mistake, not a map.
+inline constexpr double max_tactile_window_px = 65536.0;
+
 /// The size in map pixels of a tactile array of `geometry` on a map of `mm_per_px`: each side's
-/// physical length (taxels x pitch) divided by the scale, rounded to whole pixels.
+/// physical length (taxels x pitch) divided by the scale, rounded to whole pixels. Throws
+/// std::invalid_argument when mm_per_px is not finite and > 0, or when a side would span more
+/// than `max_tactile_window_px` (the scale range is named in the message).
 [[nodiscard]] inline pixel_size tactile_window(const taxel_geometry& geometry, double mm_per_px) {
   geometry.validate();
+  if (!(std::isfinite(mm_per_px) && mm_per_px > 0.0))
+    detail::fail("tactile_window: mm_per_px = ", mm_per_px,
+                 "; expected the map's scale, a finite value > 0 millimetres per pixel");
+  const double longest =
+      static_cast<double>(std::max(geometry.rows, geometry.cols)) * geometry.pitch_mm;
+  // Checked before rounding: std::lround of a side beyond the long range (mm_per_px 1e-300) is
+  // undefined, and gave "covers less than one pixel".
+  if (!(longest / mm_per_px <= max_tactile_window_px))
+    detail::fail("tactile_window: mm_per_px = ", mm_per_px, " makes the ", geometry.rows, " x ",
+                 geometry.cols, " array at ", geometry.pitch_mm, " mm span ", longest / mm_per_px,
+                 " px; expected a scale in [", longest / max_tactile_window_px,
+                 ", infinity) mm per px (at most ", max_tactile_window_px,
+                 " px per side) — check the units: millimetres per pixel, not pixels per mm");
   const auto side = [&](Eigen::Index taxels) {
     return static_cast<Eigen::Index>(
         std::lround(static_cast<double>(taxels) * geometry.pitch_mm / mm_per_px));

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "tacmap/config.hpp"
+#include "tacmap/detail/mass_sum.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/motion/concept.hpp"
 
@@ -46,7 +47,7 @@ block_masses predict_blocks(Eigen::Index blocks, Span span, Buffers buffers, Pre
   std::exception_ptr lost_everything;
   for (Eigen::Index k = 0; k < blocks; ++k) {
     const auto [at, n] = span(k);
-    const double mass = static_cast<double>(in.segment(at, n).sum());
+    const double mass = mass_sum(in.data() + at, n);
     m.before += mass;
     if (!(mass > 0.0)) {
       out.segment(at, n).setZero();
