@@ -218,12 +218,19 @@ class position_statistics {
     for (Eigen::Index at = 0; at < b.size(); at += plane)
       p_flat += view_type(b.data() + at, plane).template cast<double>();
     const double sx = std::abs(lattice_step_(0)), sy = std::abs(lattice_step_(1));
-    const auto reach_r = static_cast<Eigen::Index>(std::floor(radius_mm / sy + 1e-9));
+    // The disc's reach in rows and its half-width per row, in states. Reaches beyond the grid
+    // are clamped to its size: such a disc covers every row (column) either way, so the sums
+    // are the same, and a radius far beyond the grid (any finite one is valid, up to DBL_MAX)
+    // neither overflows the conversion to an integer nor sizes `half` by the radius (found by
+    // fuzz/localizer_api.cpp: a radius of 1e127 mm).
+    const auto reach_r = static_cast<Eigen::Index>(
+        std::floor(std::min(radius_mm / sy + 1e-9, static_cast<double>(rows))));
     std::vector<Eigen::Index> half(static_cast<std::size_t>(reach_r + 1));
     for (Eigen::Index dr = 0; dr <= reach_r; ++dr) {
       const double dy = static_cast<double>(dr) * sy;
       half[static_cast<std::size_t>(dr)] = static_cast<Eigen::Index>(
-          std::floor(std::sqrt(std::max(0.0, radius_mm * radius_mm - dy * dy)) / sx + 1e-9));
+          std::floor(std::min(std::sqrt(std::max(0.0, radius_mm * radius_mm - dy * dy)) / sx + 1e-9,
+                              static_cast<double>(cols))));
     }
     const Eigen::Index pad = half[0];
     image<double>& prefix = disc_prefix_;  // prefix(r, pad + j) = sum of p(r, 0..j-1)
