@@ -156,14 +156,15 @@ inline tacmap::tactile_frame read_frame(input& in, const tacmap::taxel_geometry&
   return f;
 }
 
-/// A probability, computed from a float belief: in [0, 1] up to the float sums' rounding (a
-/// posterior of 1.0000000075 has been seen: the float mass of a block summed in double).
-inline bool probability(double p) { return p >= 0.0 && p <= 1.0 + 1e-6; }
-
-/// How far from 1 a float belief's sum may be: normalised in float lanes, the beliefs here (at
-/// most 48 x 48 positions x 8 headings x 2 appearances) sum to 1 within a few 1e-6; 1e-4 leaves
-/// room without hiding lost mass.
+/// How far from 1 a float belief's sum may be: normalised in float lanes (issue 37, section 2),
+/// the beliefs here (at most 48 x 48 positions x 8 headings x 2 appearances) have been seen
+/// 2.9e-6 off; 1e-4 leaves room without hiding lost mass.
 inline constexpr double sum_tolerance = 1e-4;
+
+/// A probability computed from a float belief: in [0, 1] up to the float sums' rounding (an
+/// appearance posterior of 1.0000029 has been seen: a hypothesis holding all the mass of a
+/// belief that sums to 1 + 2.9e-6).
+inline bool probability(double p) { return p >= 0.0 && p <= 1.0 + sum_tolerance; }
 
 /// A belief image (position belief, conditioned or marginal): finite, non-negative, summing
 /// to 1.
