@@ -12,6 +12,8 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <limits>
@@ -125,21 +127,38 @@ class random_bits {
   std::uint64_t state_;
 };
 
-/// The exceptions the public API documents for bad input: std::invalid_argument (a value out
-/// of range), std::domain_error (a belief the model cannot continue from). Anything else
-/// escaping the API, or one of these without a message, is a finding.
+/// TACMAP_FUZZ_VERBOSE=1 in the environment prints every refusal (to see what a finding did).
+inline bool verbose() {
+  static const bool on = std::getenv("TACMAP_FUZZ_VERBOSE") != nullptr;
+  return on;
+}
+
+/// What a call threw.
+enum class refusal { none, invalid_argument, domain_error };
+
+/// Runs `call`. The exceptions the public API documents for bad input are std::invalid_argument
+/// (a value out of range) and std::domain_error (a belief the model cannot continue from); they
+/// are caught and reported. Anything else escaping the API, or one of these without a message,
+/// is a finding.
 template <class Call>
-bool throws_documented(Call&& call) {
+refusal refused(Call&& call) {
   try {
     std::forward<Call>(call)();
   } catch (const std::invalid_argument& e) {
+    if (verbose()) std::fprintf(stderr, "refused (invalid_argument): %s\n", e.what());
     TACMAP_FUZZ_CHECK(std::string_view(e.what()).size() > 20);
-    return true;
+    return refusal::invalid_argument;
   } catch (const std::domain_error& e) {
+    if (verbose()) std::fprintf(stderr, "refused (domain_error): %s\n", e.what());
     TACMAP_FUZZ_CHECK(std::string_view(e.what()).size() > 20);
-    return true;
+    return refusal::domain_error;
   }
-  return false;
+  return refusal::none;
+}
+
+template <class Call>
+bool throws_documented(Call&& call) {
+  return refused(std::forward<Call>(call)) != refusal::none;
 }
 
 }  // namespace tacmap_fuzz
