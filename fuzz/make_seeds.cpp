@@ -1,10 +1,12 @@
 // Writes the fuzz targets' seed corpus: valid and damaged inputs that lead the fuzzer to the
 // interesting code paths quickly (a random byte string almost never carries a valid CRC).
 //
-//   make_fuzz_seeds fuzz/corpus     (writes fuzz/corpus/weiss_parser/*, .../session_reader/*)
+//   make_fuzz_seeds fuzz/corpus     (writes fuzz/corpus/weiss_parser/*, .../session_reader/*,
+//                                     .../image_loaders/*)
 //
 // The first two bytes of a weiss_parser input select the family, the chunk size and the cell
 // count (see weiss_parser.cpp); the seeds use 84 cells, the paper's 14 x 6 array.
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -13,6 +15,8 @@
 #include <vector>
 
 #include "tacmap/devices/weiss/codec.hpp"
+#include "tacmap/io/image_file.hpp"
+#include "tacmap/io/image_io.hpp"
 #include "tacmap/io/session_log.hpp"
 
 namespace {
@@ -161,6 +165,66 @@ void session_seeds(const fs::path& dir) {
   write(dir / "empty.session", std::string());
 }
 
+// Small images in every format load_image reads: a gradient with a bright square, so that the
+// decoders' filters and predictors see both smooth and sharp changes.
+tacmap::image<float> test_image(Eigen::Index rows, Eigen::Index cols) {
+  tacmap::image<float> img(rows, cols);
+  for (Eigen::Index r = 0; r < rows; ++r)
+    for (Eigen::Index c = 0; c < cols; ++c)
+      img(r, c) = (r >= 2 && r < 5 && c >= 3 && c < 7)
+                      ? 1.0F
+                      : static_cast<float>(r * cols + c) / static_cast<float>(rows * cols);
+  return img;
+}
+
+std::string jpeg(const std::vector<std::uint8_t>& pixels, int width, int height, int channels) {
+  std::string out;
+  const auto append = [](void* context, void* data, int size) {
+    static_cast<std::string*>(context)->append(static_cast<const char*>(data),
+                                               static_cast<std::size_t>(size));
+  };
+  stbi_write_jpg_to_func(append, &out, width, height, channels, pixels.data(), 90);
+  return out;
+}
+
+void image_seeds(const fs::path& dir) {
+  fs::create_directories(dir);
+  const tacmap::image<float> img = test_image(9, 11);
+  write(dir / "grey.pgm", tacmap::encode_pgm(img, "make_fuzz_seeds"));
+  // 16-bit samples (maxval 1023: a 10-bit camera).
+  std::string deep = "P5\n# ten bits\n11 9\n1023\n";
+  for (Eigen::Index i = 0; i < img.size(); ++i) {
+    const auto v = static_cast<unsigned>(std::lround(img.data()[i] * 1023.0F));
+    deep.push_back(static_cast<char>(v >> 8U));
+    deep.push_back(static_cast<char>(v & 0xFFU));
+  }
+  write(dir / "deep.pgm", deep);
+  const std::string png = tacmap::encode_png(img);
+  write(dir / "stored.png", png);
+  write(dir / "compressed.png", tacmap::encode_png_compressed(img));
+  tacmap::rgb_image rgb{img, img.reverse(), 1.0F - img};
+  write(dir / "rgb.png", tacmap::encode_png_compressed(rgb));
+  std::vector<std::uint8_t> grey_pixels;
+  std::vector<std::uint8_t> rgb_pixels;
+  for (Eigen::Index r = 0; r < img.rows(); ++r)
+    for (Eigen::Index c = 0; c < img.cols(); ++c) {
+      grey_pixels.push_back(tacmap::detail::image_io::to_byte(img(r, c)));
+      rgb_pixels.push_back(tacmap::detail::image_io::to_byte(rgb.r(r, c)));
+      rgb_pixels.push_back(tacmap::detail::image_io::to_byte(rgb.g(r, c)));
+      rgb_pixels.push_back(tacmap::detail::image_io::to_byte(rgb.b(r, c)));
+    }
+  const auto w = static_cast<int>(img.cols());
+  const auto h = static_cast<int>(img.rows());
+  write(dir / "grey.jpg", jpeg(grey_pixels, w, h, 1));
+  const std::string colour = jpeg(rgb_pixels, w, h, 3);
+  write(dir / "rgb.jpg", colour);
+  // Damaged files: cut off, and a header that promises more than the file holds.
+  write(dir / "truncated.png", png.substr(0, png.size() / 2));
+  write(dir / "truncated.jpg", colour.substr(0, colour.size() / 2));
+  write(dir / "truncated.pgm", std::string("P5 11 9 255\n") + std::string(20, '\x40'));
+  write(dir / "not_an_image.gif", std::string("GIF89a\x01\x00\x01\x00"));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -170,6 +234,7 @@ int main(int argc, char** argv) {
   }
   weiss_seeds(fs::path(argv[1]) / "weiss_parser");
   session_seeds(fs::path(argv[1]) / "session_reader");
+  image_seeds(fs::path(argv[1]) / "image_loaders");
   std::printf("seeds written under %s\n", argv[1]);
   return 0;
 }

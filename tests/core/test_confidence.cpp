@@ -235,4 +235,25 @@ TEST_CASE("most_probable_disc's mass is probability_within of its centre, for an
   }
 }
 
+TEST_CASE("most_probable_disc: a radius beyond the grid covers all of it, up to DBL_MAX") {
+  // Any finite radius is a valid setting (confidence_params); the disc's reach used to be an
+  // integer conversion of radius / step (undefined beyond 2^63) and a vector of that length
+  // (fuzz/localizer_api.cpp found it with 1e127 mm).
+  auto f = tacmap_test::lattice_filter();
+  const Eigen::Index n = f.grid().size();
+  tacmap::belief_array<grid_t> prior(n);
+  for (Eigen::Index i = 0; i < n; ++i) prior(i) = static_cast<float>(1 + (i * 11) % 17);
+  f.set_prior(prior / prior.sum());
+  const Eigen::Vector2d extent = (f.grid().state_mm(n - 1) - f.grid().state_mm(0)).cast<double>();
+  const auto [covering_centre, covering_mass] = f.most_probable_disc(extent.norm() * 1.01);
+  CHECK(covering_mass == doctest::Approx(1.0).epsilon(1e-9));
+  for (const double radius :
+       {extent.norm() * 3.0, 1e9, 1e127, 1e200, std::numeric_limits<double>::max()}) {
+    CAPTURE(radius);
+    const auto [centre, mass] = f.most_probable_disc(radius);
+    CHECK(mass == doctest::Approx(1.0).epsilon(1e-9));
+    CHECK((centre - covering_centre).norm() < 1e-9);
+  }
+}
+
 }  // namespace test_confidence

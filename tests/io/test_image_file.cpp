@@ -244,6 +244,67 @@ TEST_CASE("image_file: JPEG, grey and colour, within the codec's error") {
   CHECK(from_red.maxCoeff() - from_red.minCoeff() < 0.01F);
 }
 
+TEST_CASE("image_file: a JPEG Huffman table of more than 256 codes is refused before stb") {
+  // stb_image 2.27 overflows its tables on such a file (fuzz/image_loaders.cpp found it; the
+  // regression input is fuzz/corpus/image_loaders/dht_oversized.jpg).
+  std::vector<std::uint8_t> ramp(16 * 8);
+  for (std::size_t i = 0; i < ramp.size(); ++i) ramp[i] = static_cast<std::uint8_t>(i * 2);
+  const std::string good = stb_jpeg(16, 8, 1, ramp);
+  const std::size_t dht = good.find("\xFF\xC4");
+  REQUIRE(dht != std::string::npos);
+  const std::size_t eoi = good.rfind("\xFF\xD9");
+  REQUIRE(eoi != std::string::npos);
+  using tacmap::detail::image_file::find_oversized_huffman_table;
+  CHECK_FALSE(find_oversized_huffman_table(as_bytes(good)).has_value());
+
+  // The first table's 16 counts (after the marker, the length and the class/id byte) made to
+  // declare 16 x 32 = 512 codes.
+  std::string bad = good;
+  for (std::size_t k = 0; k < 16; ++k) bad[dht + 5 + k] = '\x20';
+  const auto found = find_oversized_huffman_table(as_bytes(bad));
+  REQUIRE(found.has_value());
+  CHECK(found->offset == dht + 4);
+  CHECK(found->codes == 512);
+  const std::string message =
+      message_of([&] { (void)tacmap::load_image(as_bytes(bad), "crafted.jpg"); });
+  CHECK(contains(message,
+                 "load_image: cannot decode 'crafted.jpg' as JPEG: the Huffman table at "
+                 "byte " +
+                     std::to_string(dht + 4) +
+                     " declares 512 codes; a table "
+                     "holds at most 256"));
+
+  // Exactly 256 codes is the most a table holds: not refused by the guard (stb then judges it).
+  // (A segment of one table: 16 counts of 16, its 256 symbols; then one of 257.)
+  std::string full = std::string("\xFF\xD8\xFF\xC4\x01\x13\x00", 7) + std::string(16, '\x10') +
+                     std::string(256, 'x') + "\xFF\xD9";
+  CHECK_FALSE(find_oversized_huffman_table(as_bytes(full)).has_value());
+  full[7 + 15] = '\x11';
+  REQUIRE(find_oversized_huffman_table(as_bytes(full)).has_value());
+  CHECK(find_oversized_huffman_table(as_bytes(full))->codes == 257);
+
+  // A DHT segment after the scan (as progressive files have) is found too ...
+  const std::string bad_table =
+      std::string("\xFF\xC4\x00\x13\x00", 5) + std::string(16, '\x20') + "ab";
+  std::string late = good;
+  late.insert(eoi, bad_table);
+  REQUIRE(find_oversized_huffman_table(as_bytes(late)).has_value());
+  CHECK(find_oversized_huffman_table(as_bytes(late))->offset == eoi + 4);
+  CHECK_THROWS_AS((void)tacmap::load_image(as_bytes(late), "late.jpg"), std::invalid_argument);
+  // ... but the same bytes inside an application segment's payload (skipped by its length,
+  // as stb does) or after the end of the image are data, and the file still decodes.
+  std::string in_app = good;
+  const std::string app =
+      std::string("\xFF\xE1\x00", 3) + static_cast<char>(2 + bad_table.size()) + bad_table;
+  in_app.insert(2, app);
+  CHECK_FALSE(find_oversized_huffman_table(as_bytes(in_app)).has_value());
+  CHECK(tacmap::load_image(as_bytes(in_app), "exif.jpg")
+            .isApprox(tacmap::load_image(as_bytes(good), "good.jpg")));
+  const std::string trailer = good + bad_table;
+  CHECK_FALSE(find_oversized_huffman_table(as_bytes(trailer)).has_value());
+  CHECK(tacmap::load_image(as_bytes(trailer), "motion.jpg").rows() == 8);
+}
+
 TEST_CASE("image_file: binary PGM goes through decode_pgm (maxval honoured, truncation refused)") {
   image<float> img(2, 2);
   img << 0.0F, 51.0F / 255.0F, 1.0F, 204.0F / 255.0F;

@@ -124,6 +124,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -174,6 +175,56 @@ inline std::string other_format(std::span<const std::uint8_t> bytes) {
 
 inline const char* name_of(format f) { return f == format::png ? "PNG" : "JPEG"; }
 
+/// A JPEG Huffman table (DHT) declaring more codes than a table can hold: where it starts
+/// (byte offset of its class/id byte) and the codes its 16 counts add up to.
+struct oversized_huffman_table {
+  std::size_t offset = 0;
+  unsigned codes = 0;
+};
+
+/// The first DHT table of a JPEG whose counts add up to more than 256 codes, or nothing.
+///
+/// Why: stb_image before 2.28 (Debian 12's libstb-dev is 2.27) builds each table into arrays of
+/// 257 sizes and 256 values without checking the counts, so such a table writes up to 3.8 KB
+/// past them (a heap overflow; found by fuzz/image_loaders.cpp). A valid table holds at most 256
+/// codes (one per 8-bit symbol), so refusing more loses no valid file. The walk finds every DHT
+/// stb could process: it skips each length-prefixed segment as stb does (stb consumes exactly
+/// a segment's length or fails), and between segments, in entropy-coded data and in padding, it
+/// takes every 0xFF followed by a marker byte as a marker, as stb's bit reader does. It stops at
+/// the first end-of-image marker, after which stb reads nothing (data appended to a JPEG, such as
+/// a motion photo's video, is not looked at).
+inline std::optional<oversized_huffman_table> find_oversized_huffman_table(
+    std::span<const std::uint8_t> bytes) {
+  // stb reads 0 past the end of the data.
+  const auto at = [&](std::size_t i) -> unsigned { return i < bytes.size() ? bytes[i] : 0U; };
+  std::size_t i = 2;  // after the start-of-image marker
+  while (i + 1 < bytes.size()) {
+    if (bytes[i] != 0xFFU || bytes[i + 1] == 0xFFU) {  // data, padding or a fill byte
+      ++i;
+      continue;
+    }
+    const unsigned marker = bytes[i + 1];
+    if (marker == 0xD9U) break;  // end of image
+    // No length: byte stuffing (0xFF00), restart markers, start of image, TEM.
+    if (marker == 0x00U || (marker >= 0xD0U && marker <= 0xD8U) || marker == 0x01U) {
+      i += 2;
+      continue;
+    }
+    const std::size_t length = (at(i + 2) << 8U) | at(i + 3);  // includes its own two bytes
+    if (marker == 0xC4U) {
+      // The segment's tables, each a class/id byte, 16 counts and as many symbols.
+      for (std::size_t table = i + 4; table < i + 2 + length && table < bytes.size();) {
+        unsigned codes = 0;
+        for (std::size_t k = 1; k <= 16; ++k) codes += at(table + k);
+        if (codes > 256U) return oversized_huffman_table{table, codes};
+        table += 17 + codes;
+      }
+    }
+    i += 2 + length;
+  }
+  return std::nullopt;
+}
+
 /// stb's reason, never null (stb leaves it unset on some paths).
 inline const char* stb_reason() {
   const char* reason = stbi_failure_reason();
@@ -215,7 +266,8 @@ inline std::string encode_png_stb(const std::vector<std::uint8_t>& pixels, Eigen
 ///
 /// Throws std::invalid_argument, naming `name`, when the bytes are empty, not PNG, JPEG or
 /// binary PGM (GIF, BMP, TIFF, colour PPM...: convert them), or a file that stb cannot decode
-/// (truncated or corrupt; stb's reason is quoted).
+/// (truncated or corrupt; stb's reason is quoted). A JPEG Huffman table of more than 256 codes
+/// is refused before stb sees it (`find_oversized_huffman_table`: stb 2.27 overflows on it).
 [[nodiscard]] inline image<float> load_image(std::span<const std::uint8_t> bytes,
                                              std::string_view name = "image") {
   namespace file = detail::image_file;
@@ -233,6 +285,12 @@ inline std::string encode_png_stb(const std::vector<std::uint8_t>& pixels, Eigen
   if (bytes.size() > static_cast<std::size_t>(INT_MAX))
     detail::fail("load_image: '", name, "' is ", bytes.size(), " bytes; stb_image reads at most ",
                  INT_MAX, " bytes — shrink the image first");
+  if (format == file::format::jpeg)
+    if (const auto bad = file::find_oversized_huffman_table(bytes))
+      detail::fail("load_image: cannot decode '", name, "' as JPEG: the Huffman table at byte ",
+                   bad->offset, " declares ", bad->codes,
+                   " codes; a table holds at most 256 — the file is corrupt (or crafted): "
+                   "re-export or re-download it");
   const auto* data = bytes.data();
   const auto size = static_cast<int>(bytes.size());
   int width = 0;
