@@ -5,7 +5,9 @@
 
 #include <array>
 #include <mutex>
+#include <span>
 #include <variant>
+#include <vector>
 
 #include "tacmap/localizer.hpp"
 #include "tacmap/tactile/preprocess.hpp"
@@ -374,6 +376,9 @@ void bind_localizer(py::module_& m) {
           "'weak_total' or 'flat'.")
       .def_readonly("restarted", &touch_result::restarted,
                     "The filter started again from a uniform belief at this touch.")
+      .def_readonly("frames_combined", &touch_result::frames_combined,
+                    "Frames combined into this touch: 1 for a single frame; for a burst "
+                    "(touch_burst), the frames kept (settling and outlier frames dropped).")
       .def_readonly("touches", &touch_result::touches,
                     "Touches used since construction or reset(), this one included.")
       .def_property_readonly("accepted", &touch_result::accepted,
@@ -431,6 +436,29 @@ void bind_localizer(py::module_& m) {
           "motion.\n\n"
           "Raises TypeError/ValueError for a frame of the wrong shape or dtype, NaN or negative "
           "counts, or a motion that is not finite or does not fit the configuration.")
+      .def(
+          "touch_burst",
+          [](py_localizer& self, const py::iterable& frames, const py::object& moved) {
+            std::vector<tactile_frame> burst;
+            for (const py::handle f : frames)
+              burst.push_back(
+                  frame_of(self.impl, py::reinterpret_borrow<py::object>(f),
+                           "Localizer.touch_burst: frame " + std::to_string(burst.size())));
+            const motion mv = motion_of(moved, "Localizer.touch_burst: moved");
+            const std::span<const tactile_frame> view(burst);
+            return locked(self, [&](localizer& loc) {
+              if (const auto* o = std::get_if<odometry>(&mv)) return loc.touch(view, *o);
+              if (const auto* s = std::get_if<sensor_odometry>(&mv)) return loc.touch(view, *s);
+              return loc.touch(view);
+            });
+          },
+          py::arg("frames"), py::arg("moved") = py::none(),
+          "One touch from a burst of frames of the same press (the paper averaged 20 "
+          "readings): combined robustly first (combine_burst with config.burst: the settling "
+          "frames and outlier frames dropped, then each taxel's median), then as touch(). "
+          "frames: a sequence of Frames or 2-D arrays, or a 3-D array (frames, rows, cols). "
+          "Raises ValueError for an empty burst or frames of different geometry, before "
+          "anything changes.")
       .def(
           "touch_at",
           [](py_localizer& self, const py::object& frame, double x_mm, double y_mm,

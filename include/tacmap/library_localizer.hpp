@@ -23,6 +23,7 @@
 #include <cstddef>
 #include <limits>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -193,8 +194,9 @@ struct library_touch_result {
   std::vector<double> appearance_probability;
   double log_prediction_support = 0.0;  ///< see `touch_result`
   frame_rejection rejection = frame_rejection::none;
-  bool restarted = false;   ///< see `touch_result`
-  std::size_t touches = 0;  ///< touches used since construction or `reset()`
+  bool restarted = false;           ///< see `touch_result`
+  std::size_t touches = 0;          ///< touches used since construction or `reset()`
+  std::size_t frames_combined = 1;  ///< see `touch_result`
   [[nodiscard]] bool accepted() const { return rejection == frame_rejection::none; }
 };
 
@@ -240,6 +242,21 @@ class basic_library_localizer {
                    ") mm is not finite; expected finite millimetres — the position source "
                    "delivered an invalid sample");
     return step(frame, moved);
+  }
+
+  /// The same touches with a press given as a burst of frames, combined by `combine_burst` with
+  /// `config().burst` first (see `basic_localizer::touch`).
+  library_touch_result touch(std::span<const tactile_frame> burst) {
+    const combined_burst combined = combine_burst(burst, config_.burst);
+    library_touch_result r = touch(combined.frame);
+    r.frames_combined = combined.used;
+    return r;
+  }
+  library_touch_result touch(std::span<const tactile_frame> burst, const odometry& moved) {
+    const combined_burst combined = combine_burst(burst, config_.burst);
+    library_touch_result r = touch(combined.frame, moved);
+    r.frames_combined = combined.used;
+    return r;
   }
 
   /// Starts a new exploration: each object's prior, a uniform belief on each map.

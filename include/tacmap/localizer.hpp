@@ -47,6 +47,7 @@
 #include "tacmap/motion/odometry_gaussian.hpp"
 #include "tacmap/motion/pose_odometry_gaussian.hpp"
 #include "tacmap/motion/robust_motion.hpp"
+#include "tacmap/tactile/burst.hpp"
 #include "tacmap/tactile/frame.hpp"
 #include "tacmap/tactile/preprocess.hpp"
 
@@ -202,6 +203,11 @@ struct localizer_config {
   /// refused (`preparation_over_budget`) with the figures and what to change. 10 s: a simple
   /// descriptor on a 600 x 512 px photograph would otherwise take about a minute, silently.
   double preparation_budget_s = 10.0;
+  /// How a press given as a burst of frames is combined into one (`combine_burst`,
+  /// tactile/burst.hpp): the `touch` and `touch_at` overloads that take a span of frames. The
+  /// paper averaged 20 readings per press; the default drops a press's settling frames and
+  /// outlier frames, then takes each taxel's median.
+  burst_params burst{};
   [[nodiscard]] double broad() const {
     return broad_probability.value_or(default_broad_probability);
   }
@@ -288,6 +294,7 @@ struct localizer_config {
       detail::fail("localizer_config: patch_spacing = ", *patch_spacing,
                    "; expected a positive number of pixels between tactile patches (paper: 9), "
                    "or empty for the model's default");
+    burst.validate();
     {
       preprocess_params p = preprocessing;  // mm_per_px is replaced by the map's
       p.mm_per_px = 1.0;
@@ -938,6 +945,9 @@ struct touch_result {
   bool restarted = false;
   /// Touches used since construction or `reset()`, this one included.
   std::size_t touches = 0;
+  /// Frames combined into this touch: 1 for a single frame; for a burst, the frames
+  /// `combine_burst` kept (the settling head and outlier frames dropped).
+  std::size_t frames_combined = 1;
 
   [[nodiscard]] bool accepted() const { return rejection == frame_rejection::none; }
 };
@@ -1152,6 +1162,23 @@ class basic_localizer {
     return r;
   }
 
+  /// The same four touches with a press given as a burst of frames (the paper averaged 20
+  /// readings): combined by `combine_burst` with `config().burst` into one frame first, so a
+  /// frame still settling or an outlier frame does not vote. Throws std::invalid_argument for
+  /// an empty burst or frames of different geometry (naming them) before anything changes.
+  touch_result touch(std::span<const tactile_frame> burst) {
+    return with_burst(burst, [&](const tactile_frame& f) { return touch(f); });
+  }
+  touch_result touch(std::span<const tactile_frame> burst, const odometry& moved) {
+    return with_burst(burst, [&](const tactile_frame& f) { return touch(f, moved); });
+  }
+  touch_result touch(std::span<const tactile_frame> burst, const sensor_odometry& moved) {
+    return with_burst(burst, [&](const tactile_frame& f) { return touch(f, moved); });
+  }
+  touch_result touch_at(std::span<const tactile_frame> burst, const arm_pose& where) {
+    return with_burst(burst, [&](const tactile_frame& f) { return touch_at(f, where); });
+  }
+
   /// Starts a new exploration on the same map: a uniform belief, no previous pose.
   void reset() {
     with_filter([](auto& f) { f.reset(); });
@@ -1230,6 +1257,14 @@ class basic_localizer {
     if constexpr (has_headings)
       if (pose_) return std::forward<F>(f)(*pose_);
     return std::forward<F>(f)(*planar_);
+  }
+
+  template <class Touch>
+  touch_result with_burst(std::span<const tactile_frame> burst, Touch&& touch_one) {
+    const combined_burst combined = combine_burst(burst, config_.burst);
+    touch_result r = std::forward<Touch>(touch_one)(combined.frame);
+    r.frames_combined = combined.used;
+    return r;
   }
 
   touch_result step(const tactile_frame& frame, const std::optional<sensor_odometry>& moved) {

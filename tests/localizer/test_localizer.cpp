@@ -323,4 +323,42 @@ TEST_CASE("touch_at: finite poses whose difference overflows are refused as such
   CHECK_NOTHROW((void)loc.touch_at(frame, {.x_mm = big, .y_mm = 1.0}));
 }
 
+TEST_CASE("a burst of frames is one touch: settling and outlier frames do not vote") {
+  const auto& p = gecko();
+  auto sim = gecko_simulator(7);
+  const auto& seq = p.sequences[0];
+  tacmap::localizer single(p.map, p.mm_per_px, fast_config());
+  tacmap::localizer burst(p.map, p.mm_per_px, fast_config());
+  for (std::size_t t = 0; t < 3; ++t) {
+    CAPTURE(t);
+    const auto& truth = p.locations[seq[t].location];
+    const tacmap::tactile_frame frame = sim.render(truth.pose());
+    // A press still settling (a third of the load), four settled readings, and one outlier
+    // frame (the load doubled): the combined frame is the settled reading, taxel by taxel.
+    std::vector<tacmap::tactile_frame> frames(6, frame);
+    frames[0].counts = frame.counts / 3.0F;
+    frames[5].counts = frame.counts * 2.0F;
+    const auto a = t == 0 ? single.touch(frame) : single.touch(frame, seq[t].measured_motion);
+    const auto b = t == 0 ? burst.touch(std::span<const tacmap::tactile_frame>(frames))
+                          : burst.touch(std::span<const tacmap::tactile_frame>(frames),
+                                        seq[t].measured_motion);
+    CHECK(a.frames_combined == 1);
+    CHECK(b.frames_combined == 4);
+    CHECK(b.position_mm.isApprox(a.position_mm));
+    CHECK(b.probability_within == doctest::Approx(a.probability_within));
+    CHECK((burst.belief() - single.belief()).abs().maxCoeff() < 1e-6F);
+  }
+  // Bad bursts are refused before anything changes: empty, or frames of another geometry.
+  const tacmap::image<float> before = burst.belief();
+  CHECK_THROWS_WITH_AS((void)burst.touch(std::span<const tacmap::tactile_frame>()),
+                       doctest::Contains("no frames"), std::invalid_argument);
+  std::vector<tacmap::tactile_frame> mixed(2, sim.render(p.locations[0].pose()));
+  mixed[1].geometry.cols = 5;
+  mixed[1].counts.setConstant(14, 5, 100.0F);
+  CHECK_THROWS_AS((void)burst.touch(std::span<const tacmap::tactile_frame>(mixed)),
+                  std::invalid_argument);
+  CHECK((burst.belief() - before).abs().maxCoeff() == 0.0F);
+  CHECK(burst.touches() == 3);
+}
+
 }  // namespace test_localizer

@@ -128,6 +128,25 @@ class TestLocalizer(unittest.TestCase):
         b = ref.touch(frame2, (0.0, 0.0))
         self.assertLess(np.linalg.norm(a.position_mm - b.position_mm), 1.5)
 
+    def test_a_localizer_takes_a_burst_as_one_touch(self):
+        p = gecko()
+        single = tacmap.Localizer(p.map, p.mm_per_px, fast_config())
+        burst = tacmap.Localizer(p.map, p.mm_per_px, fast_config())
+        frame = np.asarray(simulator(4).render(*p.locations[1]), dtype=np.float64)
+        # A press settling, four settled readings and an outlier: a 3-D array works as well.
+        frames = np.stack([frame / 3.0, frame, frame, frame, frame, 2.0 * frame])
+        a = single.touch(frame)
+        b = burst.touch_burst(frames)
+        self.assertEqual(a.frames_combined, 1)
+        self.assertEqual(b.frames_combined, 4)
+        np.testing.assert_allclose(b.position_mm, a.position_mm)
+        np.testing.assert_allclose(burst.belief(), single.belief(), atol=1e-6)
+        c = burst.touch_burst(list(frames), (1.0, 0.0))
+        self.assertEqual(c.touches, 2)
+        with self.assertRaisesRegex(ValueError, "no frames"):
+            burst.touch_burst([])
+        self.assertEqual(burst.touches, 2)
+
     def test_frames_as_frame_objects_arrays_and_strided_views_agree(self):
         p = gecko()
         sim = simulator(3)
