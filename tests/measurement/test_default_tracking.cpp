@@ -179,7 +179,7 @@ TEST_CASE("the default pose motion's windowed predict moves a box as its whole-g
       for (Eigen::Index r = box.row; r < box.row + box.rows; ++r)
         for (Eigen::Index c = box.col; c < box.col + box.cols; ++c)
           b(h * n + a * plane + r * cols + c) =
-              static_cast<float>((h == 0 ? 2.0 : 1.0) + 0.1 * static_cast<double>(a + r - c));
+              static_cast<float>((h == 0 ? 2.0 : 1.0) + 0.1 * static_cast<double>(a + r + c));
   b /= b.sum();
   const tacmap::sensor_odometry u{.du_mm = 2.2, .dv_mm = 1.3, .dtheta_rad = 0.12};
   const tacmap::robust_motion motion(
@@ -310,7 +310,6 @@ TEST_CASE("a kidnap under tracking: the whole grid is checked and the new place 
     const auto rt = tracked.update(z);
     full.update(z);
     whole_grid += rt.path != update_path::tracked ? 1 : 0;
-    MESSAGE(std::string(tacmap::to_string(rt.path)), " lps ", rt.log_prediction_support);
     const auto truth = true_mm(full, row, col);
     if (found_tracked < 0 &&
         (tracked.estimate().map_mm.head<2>() - truth).norm() <= 3.0 * mm_per_px)
