@@ -78,11 +78,15 @@ struct localization_config : localizer_config {
   /// Each sequence's sensor heading drawn uniformly from [-pi, pi) (its own stream of the
   /// simulator seed) instead of 0; the odometry is then reported in the sensor's frame.
   bool random_orientation = false;
+  /// Tracking mode (`bayes_filter::set_tracking`) for the filter, e.g. `default_tracking()`:
+  /// what a localizer that tracks by default runs. Empty: off.
+  std::optional<tracking_params> tracking;
 
   /// Throws std::invalid_argument for settings that contradict each other, naming both.
   void validate() const {
     localizer_config::validate();
     faults.validate();
+    if (tracking) tracking->validate();
   }
 };
 namespace detail {
@@ -354,10 +358,13 @@ class localization_experiment {
                                 scenario_seed(config_.simulator_seed, 0));
     v.pressed_relief = margin_px_ > 0 ? padded(v.relief, margin_px_) : v.relief;
     // The filter a `localizer` with this configuration runs on this map.
-    if (config_.headings == 0)
+    if (config_.headings == 0) {
       v.filter.emplace(make_planar_filter(config_, v.visual_map, protocol_->mm_per_px, window_));
-    else
+      if (config_.tracking) v.filter->set_tracking(*config_.tracking);
+    } else {
       v.pose_filter.emplace(make_pose_filter(config_, v.visual_map, protocol_->mm_per_px, window_));
+      if (config_.tracking) v.pose_filter->set_tracking(*config_.tracking);
+    }
     variants_[which].emplace(std::move(v));
   }
 
