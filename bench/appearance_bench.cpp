@@ -153,6 +153,106 @@ BENCHMARK_CAPTURE(pose_touch_default_filter, wide_default,
                   tacmap::localizer_config::default_wide_probability)
     ->Unit(benchmark::kMillisecond);
 
+// Tracking under the default (issue 36): touches once localized (three full touches first),
+// as time_touches times them, with tracking `params` (off: {}), and what share of them the
+// tracked path took (counter `tracked`; the others are the whole grid: the scheduled re-check
+// every `recheck_every` touches and any doubt) and the states it evaluated per touch.
+template <class Filter>
+void time_localized_touches(benchmark::State& state, Filter& filter,
+                            const tacmap::image<float>& map, const tacmap::tracking_params& params,
+                            const typename Filter::control_type& there,
+                            const typename Filter::control_type& back) {
+  const tacmap::image<float> a = map.block(30, 40, 42, 18);
+  const tacmap::image<float> b = map.block(30, 44, 42, 18);
+  filter.set_tracking({});
+  filter.reset();
+  filter.update(a);
+  filter.predict(there);
+  filter.update(b);
+  filter.predict(back);
+  filter.update(a);
+  filter.set_tracking(params);
+  bool at_a = true;
+  double tracked = 0.0, evaluated = 0.0, touches = 0.0;
+  for (auto _ : state) {
+    filter.predict(at_a ? there : back);
+    const tacmap::update_report r = filter.update(at_a ? b : a);
+    at_a = !at_a;
+    tracked += r.path == tacmap::update_path::tracked ? 1.0 : 0.0;
+    evaluated += static_cast<double>(r.evaluated_states);
+    touches += 1.0;
+    benchmark::DoNotOptimize(filter.belief().data());
+  }
+  state.counters["tracked"] = tracked / touches;
+  state.counters["evaluated"] = evaluated / touches;
+}
+
+// The localizer's planar filter (make_planar_filter, defaults) once localized: tracking off
+// (today's front door) and `default_tracking()`.
+void planar_touch_default_filter_localized(benchmark::State& state, bool tracking) {
+  const auto map = bench_map();
+  auto filter = tacmap::make_planar_filter({}, map, 3.4 / 3.0, {.width = 18, .height = 42});
+  time_localized_touches(state, filter, map,
+                         tracking ? tacmap::default_tracking() : tacmap::tracking_params{},
+                         {.dx_mm = 4.5, .dy_mm = 0.0}, {.dx_mm = -4.5, .dy_mm = 0.0});
+}
+BENCHMARK_CAPTURE(planar_touch_default_filter_localized, full, false)
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(planar_touch_default_filter_localized, tracked, true)
+    ->Unit(benchmark::kMicrosecond);
+
+// The localizer's pose filter with the rotated model's tracking hook: make_pose_filter's
+// components (36 headings, both appearances, robust motion's floor and wide component, the
+// default classic_sift rotated model and its parameters) with the model used directly, since
+// `configured_rotated_measurement` does not forward the hook yet.
+using pose_default_tracking_filter = tacmap::bayes_filter<
+    tacmap::latent_grid<pose>,
+    tacmap::robust_motion<tacmap::latent_motion<tacmap::pose_odometry_gaussian>>,
+    tacmap::appearance_likelihood<tacmap::rotated_descriptor_likelihood<tacmap::classic_sift>>>;
+
+pose_default_tracking_filter make_pose_default_tracking_filter(const tacmap::image<float>& map,
+                                                               double mm_per_px) {
+  tacmap::localizer_config c;
+  c.headings = 36;
+  const pose grid(tacmap::planar_grid<float>({.width = map.cols(), .height = map.rows()}, mm_per_px,
+                                             {.width = 18, .height = 42}),
+                  c.headings);
+  tacmap::rotated_likelihood_params p;
+  p.pairs = c.pairs;
+  p.shape = c.shape;
+  if (c.tau) p.tau = *c.tau;
+  if (c.patch_spacing) p.spacing = *c.patch_spacing;
+  p.tempering = c.tempering;
+  const auto appearances = c.appearances();
+  return pose_default_tracking_filter(
+      tacmap::latent_grid<pose>(grid, tacmap::appearance_names(appearances)),
+      tacmap::robust_motion(
+          tacmap::latent_motion<tacmap::pose_odometry_gaussian>(
+              tacmap::pose_odometry_gaussian(
+                  {.sigma_mm = c.motion_sigma_mm, .k = c.motion_k, .sigma_rad = c.turn_sigma_rad}),
+              {.switch_probability = c.switch_probability()}),
+          tacmap::robust_motion_params{.lost_probability = c.lost(),
+                                       .wide_probability = c.wide(),
+                                       .wide_sigma_mm = c.wide_sigma_mm,
+                                       .broad_probability = c.broad(),
+                                       .broad_sigma_mm = c.broad_sigma_mm}),
+      tacmap::appearance_likelihood<tacmap::rotated_descriptor_likelihood<tacmap::classic_sift>>(
+          tacmap::rotated_descriptor_likelihood<tacmap::classic_sift>({}, map, grid, p),
+          appearances));
+}
+
+void pose_touch_default_filter_localized(benchmark::State& state, bool tracking) {
+  const auto map = bench_map();
+  auto filter = make_pose_default_tracking_filter(map, 3.4 / 3.0);
+  time_localized_touches(state, filter, map,
+                         tracking ? tacmap::default_tracking() : tacmap::tracking_params{},
+                         {.du_mm = 4.5, .dv_mm = 0.0, .dtheta_rad = 0.0},
+                         {.du_mm = -4.5, .dv_mm = 0.0, .dtheta_rad = 0.0});
+}
+BENCHMARK_CAPTURE(pose_touch_default_filter_localized, full, false)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(pose_touch_default_filter_localized, tracked, true)
+    ->Unit(benchmark::kMillisecond);
+
 // Which object, and where (issue 15): one touch (predict + update) of the library filter
 // (make_library_filter: the localizer's default filter per object) over N objects of the bench
 // map's size, each its own map. Against planar_touch_default_filter (one object, the same filter)

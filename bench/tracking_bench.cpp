@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <optional>
 #include <random>
 #include <type_traits>
 #include <utility>
@@ -44,7 +45,16 @@
 
 namespace {
 
-constexpr double mm_per_px = 0.2;
+// The map's scale: 0.2 mm/px unless TACMAP_BENCH_MM_PER_PX says otherwise (issue 36's cases:
+// 0.28, a 640 x 480 photograph of an object about 180 mm wide; 1.13, a 725 mm panel). It sets
+// how many cells robust motion's 3 mm wide component spans.
+const double mm_per_px = [] {
+  if (const char* env = std::getenv("TACMAP_BENCH_MM_PER_PX")) {
+    const double v = std::atof(env);
+    if (v > 0.0 && v < 100.0) return v;
+  }
+  return 0.2;
+}();
 constexpr tacmap::pixel_size window{.width = 18, .height = 42};
 
 const tacmap::image<float>& map() {
@@ -158,9 +168,10 @@ tacmap::image<float> noisy_cut(Eigen::Index dc, unsigned seed) {
 // cuts, or 16 noisy draws of each in turn).
 template <class Filter>
 void localized_touch(benchmark::State& state, Filter& f, bool tracking, bool noisy = false,
-                     double epsilon = 1e-6) {
+                     double epsilon = 1e-6,
+                     std::optional<tacmap::tracking_params> params = std::nullopt) {
   localize(f);
-  if (tracking) f.set_tracking({.epsilon = epsilon});
+  if (tracking) f.set_tracking(params ? *params : tacmap::tracking_params{.epsilon = epsilon});
   std::vector<tacmap::image<float>> as, bs;
   for (unsigned k = 0; k < (noisy ? 16U : 1U); ++k) {
     as.push_back(noisy ? noisy_cut(0, 2 * k + 1) : cut());
@@ -269,6 +280,17 @@ void default_filter_touch_full(benchmark::State& state) {
 void default_filter_touch_tracking_on(benchmark::State& state) {
   localized_touch(state, latent(true), true);
 }
+// Tracking under the default (issue 36): the same filter with `default_tracking()` (the floor
+// carried as one number, the whole grid every 16 touches and on doubt); exact and noisy touches.
+void default_filter_touch_tracked(benchmark::State& state) {
+  localized_touch(state, latent(true), true, false, 0.0, tacmap::default_tracking());
+}
+void default_filter_touch_tracked_noisy(benchmark::State& state) {
+  localized_touch(state, latent(true), true, true, 0.0, tacmap::default_tracking());
+}
+void default_filter_touch_full_noisy(benchmark::State& state) {
+  localized_touch(state, latent(true), false, true);
+}
 
 }  // namespace
 
@@ -302,3 +324,6 @@ BENCHMARK(latent_touch_full)->Unit(benchmark::kMicrosecond);
 BENCHMARK(latent_touch_tracked)->Unit(benchmark::kMicrosecond);
 BENCHMARK(default_filter_touch_full)->Unit(benchmark::kMicrosecond);
 BENCHMARK(default_filter_touch_tracking_on)->Unit(benchmark::kMicrosecond);
+BENCHMARK(default_filter_touch_tracked)->Unit(benchmark::kMicrosecond);
+BENCHMARK(default_filter_touch_full_noisy)->Unit(benchmark::kMicrosecond);
+BENCHMARK(default_filter_touch_tracked_noisy)->Unit(benchmark::kMicrosecond);

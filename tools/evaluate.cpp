@@ -501,6 +501,11 @@ int main(int argc, char** argv) try {
                  "headings (comma-separated list to compare, e.g. 0,36)")
       ->delimiter(',')
       ->check(CLI::Range(0, 3600));
+  bool tracking = false;
+  app.add_flag(
+      "--tracking", tracking,
+      "the filter tracks once localized (tacmap::default_tracking(): the likelihood only "
+      "where the prediction holds its mass, the whole grid every 16 touches and on doubt)");
   app.add_flag("--random-orientation", random_orientation,
                "configurations with headings > 0: each sequence's sensor heading is drawn "
                "uniformly (known-orientation ones keep heading 0)");
@@ -663,6 +668,7 @@ int main(int argc, char** argv) try {
     base.faults = faults;
     base.self_calibrate = self_calibrate >= 0;
     base.calibration_warmup = self_calibrate > 0 ? static_cast<std::size_t>(self_calibrate) : 0;
+    if (tracking) base.tracking = tacmap::default_tracking();
     if (kind == tacmap::measurement_kind::ncc) {
       for (const auto& t : tau_values) {
         auto c = base;

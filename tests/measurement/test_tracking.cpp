@@ -282,7 +282,8 @@ TEST_CASE(
     f.set_tracking({.epsilon = 1e-6});
     CHECK(f.update(touch_at({20, 20})).path == update_path::full);
   }
-  SUBCASE("the localizer's default motion floor spreads lost_probability over every state") {
+  SUBCASE("the localizer's default filter after one touch on this small map: a wide support") {
+    // (Its motion floor no longer forces the whole grid: test_default_tracking.cpp.)
     auto f = tacmap::make_planar_filter(tacmap::localizer_config{}, test_map(), mm_per_px, window);
     f.set_tracking({.epsilon = 1e-6});
     f.update(touch_at({30, 30}));

@@ -109,4 +109,15 @@ concept moves_box = motion_model<M, G> &&
   { m.predict_boxes(g, b, boxes, u, landed, dropped) } -> std::same_as<bool>;
 };
 
+/// Motion models whose prediction puts the same probability on every state (a "uniform floor":
+/// `robust_motion`'s lost_probability lambda), p(x_t | x_{t-1}, u_t) = (1 - lambda) p_0 +
+/// lambda / N: `m.uniform_floor()` returns lambda in [0, 1). A tracking filter
+/// (`bayes_filter::set_tracking`) then carries the floor's share as one number — the mass it
+/// leaves on the states outside the tracked support — instead of moving it, and checks the
+/// whole grid when the touch may fit better there.
+template <class M>
+concept has_uniform_floor = requires(const M& m) {
+  { m.uniform_floor() } -> std::convertible_to<double>;
+};
+
 }  // namespace tacmap

@@ -20,12 +20,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
+#include <stdexcept>
 #include <tuple>
 #include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "tacmap/detail/mass_sum.hpp"
+#include "tacmap/filter/detail/support.hpp"
 #include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/motion/concept.hpp"
 #include "tacmap/motion/detail/block_prediction.hpp"
@@ -101,9 +104,71 @@ class latent_motion {
     return {std::clamp(1.0 - m.kept / m.before, 0.0, 1.0)};
   }
 
+  /// Tracking mode (`moves_box`, motion/concept.hpp): the base model's `predict_boxes` in every
+  /// hypothesis's block (the boxes are on the belief image, so each block's states inside
+  /// them), then the switch between hypotheses on the states where the moved mass landed
+  /// (`landed`, each box's window united over the blocks). Every state outside those windows
+  /// keeps its value in every block: the switch would only move such a state's mass between
+  /// blocks, which leaves the mass outside the windows — what the filter's bound counts — as it
+  /// is. Not renormalised (`dropped`: the blocks' mass carried off the grid). False, the belief
+  /// unchanged, when the base model cannot move the boxes (its refusals depend on the grid, the
+  /// boxes and the control only, so every block agrees; a base model whose second block refuses
+  /// after the first moved is a broken contract: std::logic_error).
+  template <latent_state_grid G>
+  requires moves_box<Motion, typename G::base_type>
+  bool predict_boxes(const G& grid, belief_array<G>& b, std::span<const grid_box> boxes,
+                     const control_type& u, std::vector<grid_box>& landed, double& dropped) const {
+    using base_grid = typename G::base_type;
+    using T = typename G::scalar_type;
+    const Eigen::Index hypotheses = grid.hypotheses(), n = grid.hypothesis_size();
+    const double s = params_.switch_probability;
+    if (b.size() != grid.size()) return false;
+    if (hypotheses > 1 && s > 1.0 - 1.0 / static_cast<double>(hypotheses)) return false;
+    dropped = 0.0;
+    for (Eigen::Index h = 0; h < hypotheses; ++h) {
+      Eigen::Map<belief_array<base_grid>> block(b.data() + h * n, n);
+      double lost = 0.0;
+      std::vector<grid_box>& mine = h == 0 ? landed : block_landed_;
+      if (!motion_.predict_boxes(grid.base(), block, boxes, u, mine, lost)) {
+        if (h == 0) return false;
+        detail::fail<std::logic_error>(
+            "latent_motion::predict_boxes: the base model moved hypothesis 0's boxes but refused "
+            "hypothesis ",
+            h,
+            "'s (same grid, boxes and control); expected the same answer for every block. The "
+            "belief is changed; reset the filter");
+      }
+      dropped += lost;
+      if (h > 0)
+        for (std::size_t i = 0; i < landed.size() && i < mine.size(); ++i)
+          landed[i] = detail::box_union(landed[i], mine[i]);
+    }
+    if (hypotheses == 1 || !(s > 0.0)) return true;
+    // The switch, out_h <- (1 - s) out_h + s / (H - 1) (total - out_h), on the windows' states
+    // (overlapping windows united first, so that each state is mixed once).
+    windows_ = landed;
+    detail::merge_boxes(windows_, 0);
+    const Eigen::Index rows = grid.rows(), cols = grid.cols(), plane = rows * cols;
+    const Eigen::Index layers = n / plane;
+    const auto move = static_cast<T>(s / static_cast<double>(hypotheses - 1));
+    const auto stay = static_cast<T>(1.0 - s) - move;
+    auto& total = scratch<T>(0);
+    for (const grid_box& w : windows_)
+      for (Eigen::Index a = 0; a < layers; ++a)
+        for (Eigen::Index r = w.row; r < w.row + w.rows; ++r) {
+          const Eigen::Index at = a * plane + r * cols + w.col;
+          total = b.segment(at, w.cols);
+          for (Eigen::Index h = 1; h < hypotheses; ++h) total += b.segment(h * n + at, w.cols);
+          for (Eigen::Index h = 0; h < hypotheses; ++h)
+            b.segment(h * n + at, w.cols) = stay * b.segment(h * n + at, w.cols) + move * total;
+        }
+    return true;
+  }
+
  private:
   Motion motion_;
   latent_motion_params params_;
+  mutable std::vector<grid_box> block_landed_, windows_;  // predict_boxes' scratch
   template <class T>
   Eigen::Array<T, Eigen::Dynamic, 1>& scratch(int which) const {
     if constexpr (std::is_same_v<T, float>)

@@ -230,8 +230,10 @@ class odometry_gaussian {
   /// `dropped` (not renormalised: the caller decides). False, `belief` unchanged, when a window
   /// would reach past the edge with `off_grid::clamp` (which piles mass on edge states), when
   /// it would leave the grid entirely, or when the odometry is not finite.
-  template <metric_planar_grid G>
-  bool predict_boxes(const G& grid, belief_array<G>& belief, std::span<const grid_box> boxes,
+  /// `belief`: the grid's belief, or a map of it (`latent_motion` moves each hypothesis's
+  /// block in place).
+  template <metric_planar_grid G, class Belief>
+  bool predict_boxes(const G& grid, Belief& belief, std::span<const grid_box> boxes,
                      const odometry& u, std::vector<grid_box>& landed, double& dropped) const {
     using T = typename G::scalar_type;
     if (!(std::isfinite(u.dx_mm) && std::isfinite(u.dy_mm))) return false;

@@ -162,8 +162,10 @@ class pose_odometry_gaussian {
   /// `off_grid::renormalize`, and its sum returned in `dropped` (not renormalised). False,
   /// `belief` unchanged, when a moved window would reach past the edge with `off_grid::clamp`
   /// or leave the grid entirely, or the odometry is not finite or a turn `predict` refuses.
-  template <metric_pose_grid G>
-  bool predict_boxes(const G& grid, belief_array<G>& belief, std::span<const grid_box> boxes,
+  /// `belief`: the grid's belief, or a map of it (`latent_motion` moves each hypothesis's
+  /// block in place).
+  template <metric_pose_grid G, class Belief>
+  bool predict_boxes(const G& grid, Belief& belief, std::span<const grid_box> boxes,
                      const sensor_odometry& u, std::vector<grid_box>& landed,
                      double& dropped) const {
     using T = typename G::scalar_type;

@@ -27,6 +27,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
+#include <span>
 #include <stdexcept>
 #include <type_traits>
 #include <utility>
@@ -181,6 +183,75 @@ class robust_motion {
       out = out * static_cast<scalar>(1.0 - lambda) +
             static_cast<scalar>(lambda / static_cast<double>(out.size()));
     return report;
+  }
+
+  /// The floor's share lambda (`has_uniform_floor`, motion/concept.hpp): every prediction puts
+  /// lambda / N on every state. A tracking filter carries it as one number rather than moving it
+  /// (`bayes_filter::set_tracking`).
+  [[nodiscard]] double uniform_floor() const { return params_.lost_probability; }
+
+  /// Tracking mode (`moves_box`, motion/concept.hpp): the base model's `predict_boxes`, then the
+  /// wide component on the windows where the moved mass landed, each grown by the blur's reach
+  /// (three box passes of radius r reach 3 r cells) and clipped to the grid: in every plane,
+  /// window = (1 - w) window + w blur(window), the blur zero outside the window at every pass as
+  /// `predict`'s is outside the grid (so at the grid's edge the same truncation, and inside it
+  /// none of the moved mass reaches the window's border). The states outside the windows keep
+  /// their values; so does the floor, which the caller carries (`uniform_floor`): this adds no
+  /// lambda / N and does not scale by 1 - lambda. `dropped`: the base model's, plus what the
+  /// blur carried past the windows' edges. Not renormalised. False, the belief unchanged, when
+  /// the base model cannot move the boxes or with a broad component (its density pools the
+  /// whole grid's position marginal).
+  template <state_grid G>
+  requires moves_box<M, G>
+  bool predict_boxes(const G& grid, belief_array<G>& b, std::span<const grid_box> boxes,
+                     const control_type& u, std::vector<grid_box>& landed, double& dropped) const {
+    using scalar = typename G::scalar_type;
+    if (params_.broad_probability > 0.0) return false;
+    if (!base_.predict_boxes(grid, b, boxes, u, landed, dropped)) return false;
+    const double w = params_.wide_probability;
+    if (!(w > 0.0)) return true;
+    const Eigen::Index rows = grid.rows(), cols = grid.cols(), plane = rows * cols;
+    const Eigen::Index layers = b.size() / plane;
+    const auto [pitch_x, pitch_y] = detail::lattice_pitch_mm(grid);
+    const Eigen::Index rx = box_radius(params_.wide_sigma_mm / pitch_x);
+    const Eigen::Index ry = box_radius(params_.wide_sigma_mm / pitch_y);
+    for (grid_box& l : landed)
+      l = detail::clip_box({l.row - 3 * ry, l.col - 3 * rx, l.rows + 6 * ry, l.cols + 6 * rx}, rows,
+                           cols);
+    // Overlapping windows united (each state blurred once): pairwise disjoint after.
+    windows_ = landed;
+    for (bool merged = true; merged;) {
+      merged = false;
+      for (std::size_t i = 0; i < windows_.size() && !merged; ++i)
+        for (std::size_t j = i + 1; j < windows_.size() && !merged; ++j) {
+          const grid_box &a = windows_[i], &c = windows_[j];
+          if (a.row < c.row + c.rows && c.row < a.row + a.rows && a.col < c.col + c.cols &&
+              c.col < a.col + a.cols) {
+            const Eigen::Index r0 = std::min(a.row, c.row), c0 = std::min(a.col, c.col);
+            const Eigen::Index r1 = std::max(a.row + a.rows, c.row + c.rows);
+            const Eigen::Index c1 = std::max(a.col + a.cols, c.col + c.cols);
+            windows_[i] = {r0, c0, r1 - r0, c1 - c0};
+            windows_.erase(windows_.begin() + static_cast<std::ptrdiff_t>(j));
+            merged = true;
+          }
+        }
+    }
+    const auto keep = static_cast<scalar>(1.0 - w);
+    for (const grid_box& win : windows_)
+      for (Eigen::Index a = 0; a < layers; ++a) {
+        Eigen::Map<image<scalar>> img(b.data() + a * plane, rows, cols);
+        auto block = img.block(win.row, win.col, win.rows, win.cols);
+        down_ = block.template cast<double>();
+        const double before = down_.sum();
+        if (!(before > 0.0)) continue;
+        box3_down(down_, scratch_, row_sum_, ry);  // along y
+        across_ = down_.transpose();
+        box3_down(across_, scratch_, row_sum_, rx);  // along x
+        const double after = across_.sum();
+        block = block * keep + (across_.transpose() * w).template cast<scalar>();
+        dropped += w * std::max(0.0, before - after);
+      }
+    return true;
   }
 
   [[nodiscard]] const M& base() const { return base_; }
@@ -505,6 +576,7 @@ class robust_motion {
 
   M base_;
   robust_motion_params params_;
+  mutable std::vector<grid_box> windows_;  // predict_boxes: the wide component's windows
   // Scratch of the wide component (reused between predictions): a plane, its transpose, and
   // the passes' other buffer, the running sum of rows.
   mutable image<double> down_, across_, scratch_;

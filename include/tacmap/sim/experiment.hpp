@@ -87,11 +87,15 @@ struct localization_config : localizer_config {
   /// the calibration, not localized): a sensor in use has a history, a 7-touch sequence alone
   /// is too short to estimate 84 taxels. Used only with `self_calibrate`.
   std::size_t calibration_warmup = 0;
+  /// Tracking mode (`bayes_filter::set_tracking`) for the filter, e.g. `default_tracking()`:
+  /// what a localizer that tracks by default runs. Empty: off.
+  std::optional<tracking_params> tracking;
 
   /// Throws std::invalid_argument for settings that contradict each other, naming both.
   void validate() const {
     localizer_config::validate();
     faults.validate();
+    if (tracking) tracking->validate();
   }
 };
 namespace detail {
@@ -372,15 +376,18 @@ class basic_localization_experiment {
                                 scenario_seed(config_.simulator_seed, 0));
     v.pressed_relief = margin_px_ > 0 ? padded(v.relief, margin_px_) : v.relief;
     // The filter a `localizer` with this configuration runs on this map.
-    if (config_.headings == 0)
+    if (config_.headings == 0) {
       v.filter.emplace(
           make_planar_filter(measurement_, config_, v.visual_map, protocol_->mm_per_px, window_));
-    else if constexpr (localizes_headings<Measurement>)
+      if (config_.tracking) v.filter->set_tracking(*config_.tracking);
+    } else if constexpr (localizes_headings<Measurement>) {
       v.pose_filter.emplace(
           make_pose_filter(measurement_, config_, v.visual_map, protocol_->mm_per_px, window_));
-    else
+      if (config_.tracking) v.pose_filter->set_tracking(*config_.tracking);
+    } else {
       detail::fail("localization_experiment: headings = ", config_.headings,
                    ", but the measurement policy has no (x, y, theta) model; use headings = 0");
+    }
     variants_[which].emplace(std::move(v));
   }
 

@@ -1,0 +1,330 @@
+// Tracking under the default (issue 36, item 2): the localizer's default filter — latent
+// appearance, robust motion's floor and wide component — tracks once localized, within its
+// stated estimate of the full update, keeps the verdict's probabilities, and still finds the
+// sensor after a kidnap. Every tracked result is compared with the full filter on the same inputs.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "tacmap/filter/bayes_filter.hpp"
+#include "tacmap/filter/confidence.hpp"
+#include "tacmap/grid/latent_grid.hpp"
+#include "tacmap/grid/planar_grid.hpp"
+#include "tacmap/grid/pose_grid.hpp"
+#include "tacmap/localizer.hpp"
+#include "tacmap/motion/latent_motion.hpp"
+#include "tacmap/motion/odometry_gaussian.hpp"
+#include "tacmap/motion/pose_odometry_gaussian.hpp"
+#include "tacmap/motion/robust_motion.hpp"
+
+namespace test_default_tracking {
+
+using tacmap::update_path;
+
+namespace {
+
+// The paper's pitch: the wide component's 3 mm is a few cells, so its windows stay small.
+constexpr double mm_per_px = 3.4 / 3.0;
+constexpr tacmap::pixel_size window{.width = 18, .height = 42};
+
+// A textured map: random bars (edges both ways) over a slanted sine, in [0, 1]; 120 x 150 px.
+const tacmap::image<float>& test_map() {
+  static const tacmap::image<float> map = [] {
+    constexpr Eigen::Index rows = 120, cols = 150;
+    std::mt19937 rng(9);
+    tacmap::image<float> m = tacmap::image<float>::Zero(rows, cols);
+    for (int bar = 0; bar < 26; ++bar)
+      m.block(static_cast<Eigen::Index>(rng() % (rows - 20)),
+              static_cast<Eigen::Index>(rng() % (cols - 20)),
+              static_cast<Eigen::Index>(3 + rng() % 17), static_cast<Eigen::Index>(3 + rng() % 17))
+          .array() += 1.0F;
+    for (Eigen::Index r = 0; r < rows; ++r)
+      for (Eigen::Index c = 0; c < cols; ++c)
+        m(r, c) += 0.2F * std::sin(0.2F * static_cast<float>(r + 2 * c));
+    m -= m.minCoeff();
+    return tacmap::image<float>(m / m.maxCoeff());
+  }();
+  return map;
+}
+
+// The window at (row, col) with a little deterministic noise: a touch, not an exact cut.
+tacmap::image<float> touch_at(Eigen::Index row, Eigen::Index col, unsigned seed) {
+  tacmap::image<float> z = test_map().block(row, col, window.height, window.width);
+  std::uint32_t state = seed * 2654435761U + 7U;
+  for (float& v : z.reshaped()) {
+    state ^= state << 13U;
+    state ^= state >> 17U;
+    state ^= state << 5U;
+    v += 0.03F * (static_cast<float>(state % 1000U) / 1000.0F - 0.5F);
+  }
+  return z;
+}
+
+template <class A, class B>
+double total_variation(const A& a, const B& b) {
+  return 0.5 * (a.template cast<double>() - b.template cast<double>()).abs().sum();
+}
+
+tacmap::planar_localizer_filter default_filter() {
+  return tacmap::make_planar_filter(tacmap::localizer_config{}, test_map(), mm_per_px, window);
+}
+
+// A walk of small moves (in px) around (row, col).
+struct walk {
+  Eigen::Index row = 40, col = 50;
+  int step = 0;
+  tacmap::odometry next() {
+    const Eigen::Index dc = step % 4 < 2 ? 2 : -2, dr = step % 2 == 0 ? 1 : -1;
+    ++step;
+    row += dr;
+    col += dc;
+    return {.dx_mm = static_cast<double>(dc) * mm_per_px,
+            .dy_mm = static_cast<double>(dr) * mm_per_px};
+  }
+};
+
+Eigen::Vector2d true_mm(const tacmap::planar_localizer_filter& f, Eigen::Index row,
+                        Eigen::Index col) {
+  const Eigen::Index cell = row * f.grid().cols() + col;
+  const auto s = f.grid().state_mm(cell);
+  return {s(0), s(1)};
+}
+
+}  // namespace
+
+TEST_CASE("default_tracking: the chosen parameters are valid and turn the floor's path on") {
+  constexpr tacmap::tracking_params p = tacmap::default_tracking();
+  CHECK_NOTHROW(p.validate());
+  CHECK(p.epsilon > 0.0);
+  CHECK(p.recheck_every > 0);
+  CHECK(std::isfinite(p.doubt));
+  static_assert(tacmap::has_uniform_floor<tacmap::robust_motion<tacmap::odometry_gaussian>>);
+  static_assert(!tacmap::has_uniform_floor<tacmap::odometry_gaussian>);
+  static_assert(
+      tacmap::moves_box<tacmap::robust_motion<tacmap::latent_motion<tacmap::odometry_gaussian>>,
+                        tacmap::latent_grid<tacmap::planar_grid<float>>>);
+  tacmap::tracking_params bad = p;
+  bad.recheck_every = -1;
+  CHECK_THROWS_AS(bad.validate(), std::invalid_argument);
+  bad = p;
+  bad.doubt = std::numeric_limits<double>::quiet_NaN();
+  CHECK_THROWS_AS(bad.validate(), std::invalid_argument);
+}
+
+TEST_CASE("the default motion's windowed predict moves a box as its whole-grid predict does") {
+  // A belief whose mass is all inside one box: predict_boxes (base move, the appearance switch
+  // on the landed window, the wide blur on it grown by its reach) must give, renormalised, what
+  // the whole grid's predict gives less its floor — float rounding apart.
+  auto f = default_filter();
+  const auto& grid = f.grid();
+  const Eigen::Index rows = grid.rows(), cols = grid.cols(), n = grid.hypothesis_size();
+  const tacmap::grid_box box{30, 40, 5, 7};
+  tacmap::belief_array<tacmap::latent_grid<tacmap::planar_grid<float>>> b(grid.size());
+  b.setZero();
+  for (Eigen::Index h = 0; h < 2; ++h)
+    for (Eigen::Index r = box.row; r < box.row + box.rows; ++r)
+      for (Eigen::Index c = box.col; c < box.col + box.cols; ++c)
+        b(h * n + r * cols + c) =
+            static_cast<float>((h == 0 ? 3.0 : 1.0) + 0.1 * static_cast<double>(r + 2 * c));
+  b /= b.sum();
+  const tacmap::odometry u{.dx_mm = 2.6, .dy_mm = -1.7};
+  // Without the floor, so that the whole grid's prediction has no uniform part to subtract.
+  const tacmap::robust_motion motion(
+      f.motion().base(), {.lost_probability = 0.0, .wide_probability = 0.1, .wide_sigma_mm = 3.0});
+  decltype(b) whole(grid.size());
+  motion.predict(grid, b, whole, u);
+  auto moved = b;
+  std::vector<tacmap::grid_box> landed;
+  double dropped = -1.0;
+  REQUIRE(motion.predict_boxes(grid, moved, std::span<const tacmap::grid_box>(&box, 1), u, landed,
+                               dropped));
+  CHECK(dropped == doctest::Approx(0.0).epsilon(1e-6));
+  REQUIRE(landed.size() == 1);
+  // Every state the mass reached is inside the landed window.
+  double inside = 0.0;
+  for (Eigen::Index h = 0; h < 2; ++h)
+    for (Eigen::Index r = landed[0].row; r < landed[0].row + landed[0].rows; ++r)
+      for (Eigen::Index c = landed[0].col; c < landed[0].col + landed[0].cols; ++c)
+        inside += static_cast<double>(moved(h * n + r * cols + c));
+  CHECK(inside == doctest::Approx(static_cast<double>(moved.sum())).epsilon(1e-6));
+  moved /= moved.sum();
+  CHECK(total_variation(moved, whole) <= 1e-5);
+  // The switch moved mass between the hypotheses as the whole grid's predict does.
+  CHECK(static_cast<double>(moved.head(n).sum()) ==
+        doctest::Approx(static_cast<double>(whole.head(n).sum())).epsilon(1e-5));
+  // The floor is the caller's: uniform_floor reports it, predict_boxes never adds it.
+  CHECK(f.motion().uniform_floor() == tacmap::localizer_config::default_lost_probability);
+  CHECK(rows > 0);
+}
+
+TEST_CASE("the default pose motion's windowed predict moves a box as its whole-grid predict does") {
+  // 36 headings and both appearances: the turn carries each heading layer's window into its
+  // neighbours, the switch mixes the hypotheses' blocks, the blur spreads every plane.
+  tacmap::localizer_config config;
+  config.headings = 36;
+  const auto f = tacmap::make_pose_filter(config, test_map(), mm_per_px, window);
+  const auto& grid = f.grid();
+  const Eigen::Index cols = grid.cols(), plane = grid.rows() * cols, n = grid.hypothesis_size();
+  const tacmap::grid_box box{25, 50, 4, 6};
+  tacmap::belief_array<tacmap::latent_grid<tacmap::pose_grid<float>>> b(grid.size());
+  b.setZero();
+  for (Eigen::Index h = 0; h < 2; ++h)
+    for (Eigen::Index a = 0; a < 36; a += 5)
+      for (Eigen::Index r = box.row; r < box.row + box.rows; ++r)
+        for (Eigen::Index c = box.col; c < box.col + box.cols; ++c)
+          b(h * n + a * plane + r * cols + c) =
+              static_cast<float>((h == 0 ? 2.0 : 1.0) + 0.1 * static_cast<double>(a + r + c));
+  b /= b.sum();
+  const tacmap::sensor_odometry u{.du_mm = 2.2, .dv_mm = 1.3, .dtheta_rad = 0.12};
+  const tacmap::robust_motion motion(
+      f.motion().base(), {.lost_probability = 0.0, .wide_probability = 0.1, .wide_sigma_mm = 3.0});
+  decltype(b) whole(grid.size());
+  motion.predict(grid, b, whole, u);
+  auto moved = b;
+  std::vector<tacmap::grid_box> landed;
+  double dropped = -1.0;
+  REQUIRE(motion.predict_boxes(grid, moved, std::span<const tacmap::grid_box>(&box, 1), u, landed,
+                               dropped));
+  CHECK(dropped == doctest::Approx(0.0).epsilon(1e-6));
+  moved /= moved.sum();
+  CHECK(total_variation(moved, whole) <= 1e-5);
+  CHECK(static_cast<double>(moved.head(n).sum()) ==
+        doctest::Approx(static_cast<double>(whole.head(n).sum())).epsilon(1e-5));
+}
+
+TEST_CASE("the default filter tracks once localized, within its estimate of the full update") {
+  auto full = default_filter();
+  walk w;
+  for (int k = 0; k < 3; ++k) {
+    full.predict(w.next());
+    full.update(touch_at(w.row, w.col, static_cast<unsigned>(k + 1)));
+  }
+  REQUIRE((full.estimate().map_mm.head<2>() - true_mm(full, w.row, w.col)).norm() < 3.0);
+  // Each step from the same belief: the tracked update against the full one (the tracked
+  // copy's whole-grid predict carries the floor on every state; its update keeps the floor's
+  // states as they are, its share estimated against the last whole-grid update).
+  int tracked_steps = 0;
+  for (int step = 0; step < 8; ++step) {
+    CAPTURE(step);
+    auto tracked = full;
+    tracked.set_tracking(tacmap::default_tracking());
+    const tacmap::odometry u = w.next();
+    tracked.predict(u);
+    full.predict(u);
+    const auto z = touch_at(w.row, w.col, static_cast<unsigned>(step + 20));
+    const tacmap::update_report rt = tracked.update(z);
+    const tacmap::update_report rf = full.update(z);
+    CHECK(rf.path == update_path::full);
+    if (rt.path != update_path::tracked) {
+      CHECK(total_variation(tracked.belief(), full.belief()) == 0.0);
+      continue;
+    }
+    ++tracked_steps;
+    CHECK(rt.evaluated_states < full.grid().size() / 4);
+    const double tv = total_variation(tracked.belief(), full.belief());
+    CHECK(tv <= rt.tracking_error_bound + 1e-5);
+    // The estimate is about the floor's share: a few lambda while the touch fits.
+    CHECK(rt.tracking_error_bound <= 4.0 * tacmap::localizer_config::default_lost_probability);
+    CHECK(rt.log_prediction_support == doctest::Approx(rf.log_prediction_support).epsilon(0.2));
+    const auto et = tracked.estimate(), ef = full.estimate();
+    CHECK(et.map_index == ef.map_index);
+    // The verdict's probability moves by no more than the posteriors differ.
+    const auto ct = tacmap::assess(tracked, et), cf = tacmap::assess(full, ef);
+    CHECK(std::abs(ct.probability_within - cf.probability_within) <= tv + 1e-5);
+    CHECK(ct.verdict == cf.verdict);
+    CHECK(tracked.belief().template cast<double>().sum() == doctest::Approx(1.0).epsilon(1e-5));
+  }
+  CHECK(tracked_steps >= 6);
+}
+
+TEST_CASE(
+    "the default filter tracking along a walk stays with the full filter, predicts windowed") {
+  auto full = default_filter();
+  walk w;
+  for (int k = 0; k < 3; ++k) {
+    full.predict(w.next());
+    full.update(touch_at(w.row, w.col, static_cast<unsigned>(k + 1)));
+  }
+  auto tracked = full;
+  tracked.set_tracking(tacmap::default_tracking());
+  int tracked_steps = 0, windowed = 0, rechecks = 0;
+  // Two re-check periods.
+  const int steps = 2 * (tacmap::default_tracking().recheck_every + 1);
+  for (int step = 0; step < steps; ++step) {
+    CAPTURE(step);
+    const tacmap::odometry u = w.next();
+    windowed += tracked.predict(u).windowed ? 1 : 0;
+    full.predict(u);
+    const auto z = touch_at(w.row, w.col, static_cast<unsigned>(step + 40));
+    const tacmap::update_report rt = tracked.update(z);
+    full.update(z);
+    tracked_steps += rt.path == update_path::tracked ? 1 : 0;
+    rechecks += rt.path == update_path::full_recheck ? 1 : 0;
+    // Windowed predicts and tracked updates compound, each within its estimate; the floor's
+    // share (lambda = 1e-3 on every state's prediction) is what they leave in place.
+    CHECK(total_variation(tracked.belief(), full.belief()) <= 0.01);
+    const auto et = tracked.estimate(), ef = full.estimate();
+    CHECK((et.map_mm - ef.map_mm).norm() <= mm_per_px * 1.5);
+    CHECK(std::abs(et.hypothesis_probability[0] - ef.hypothesis_probability[0]) <= 0.01);
+    const auto ct = tacmap::assess(tracked, et), cf = tacmap::assess(full, ef);
+    CHECK(std::abs(ct.probability_within - cf.probability_within) <= 0.01);
+    CHECK(tracked.belief().template cast<double>().sum() == doctest::Approx(1.0).epsilon(1e-5));
+  }
+  CHECK(tracked_steps >= 16);
+  CHECK(windowed >= 12);
+  // Every recheck_every tracked touches the whole grid: two periods hold at least two.
+  CHECK(rechecks >= 2);
+}
+
+TEST_CASE("a kidnap under tracking: the whole grid is checked and the new place found") {
+  auto full = default_filter();
+  walk w;
+  for (int k = 0; k < 3; ++k) {
+    full.predict(w.next());
+    full.update(touch_at(w.row, w.col, static_cast<unsigned>(k + 1)));
+  }
+  auto tracked = full;
+  tracked.set_tracking(tacmap::default_tracking());
+  for (int step = 0; step < 6; ++step) {
+    const tacmap::odometry u = w.next();
+    tracked.predict(u);
+    full.predict(u);
+    const auto z = touch_at(w.row, w.col, static_cast<unsigned>(step + 60));
+    tracked.update(z);
+    full.update(z);
+  }
+  // Kidnapped: the sensor is put down far away while the odometry says it moved 2 px.
+  Eigen::Index row = 10, col = 90;
+  int whole_grid = 0, found_tracked = -1, found_full = -1;
+  for (int step = 0; step < 12; ++step) {
+    CAPTURE(step);
+    const tacmap::odometry u{.dx_mm = 2.0 * mm_per_px};
+    col += 2;
+    tracked.predict(u);
+    full.predict(u);
+    const auto z = touch_at(row, col, static_cast<unsigned>(step + 80));
+    const auto rt = tracked.update(z);
+    full.update(z);
+    whole_grid += rt.path != update_path::tracked ? 1 : 0;
+    const auto truth = true_mm(full, row, col);
+    if (found_tracked < 0 &&
+        (tracked.estimate().map_mm.head<2>() - truth).norm() <= 3.0 * mm_per_px)
+      found_tracked = step;
+    if (found_full < 0 && (full.estimate().map_mm.head<2>() - truth).norm() <= 3.0 * mm_per_px)
+      found_full = step;
+  }
+  REQUIRE(found_full >= 0);
+  CHECK(whole_grid >= 1);
+  // Found within a few touches of the full filter: at worst after the scheduled re-check.
+  REQUIRE(found_tracked >= 0);
+  CHECK(found_tracked <= found_full + tacmap::default_tracking().recheck_every);
+  CHECK((tracked.estimate().map_mm - full.estimate().map_mm).norm() <= mm_per_px * 1.5);
+}
+
+}  // namespace test_default_tracking
