@@ -267,6 +267,13 @@ class basic_library_localizer {
     restarts_ = 0;
   }
 
+  /// The sensor's self-calibration (see `basic_localizer::sensor_calibration`), or nullptr.
+  [[nodiscard]] const self_calibration* sensor_calibration() const {
+    return correction_.estimate();
+  }
+  /// Forgets what the self-calibration learnt; `reset()` keeps it.
+  void reset_sensor_calibration() { correction_.reset(); }
+
   [[nodiscard]] const filter_type& filter() const { return filter_; }
   /// The configuration, with `preprocessing.mm_per_px` set to the library's scale.
   [[nodiscard]] const localizer_config& config() const { return config_; }
@@ -295,7 +302,7 @@ class basic_library_localizer {
                    " at ", sensor_.pitch_mm, " mm; build it with the frame's geometry");
     // Preprocess (and let the policy check the touch) first: a malformed frame throws before
     // anything changes.
-    const preprocessed_frame pre = preprocess(frame, config_.preprocessing);
+    const preprocessed_frame pre = preprocess(correction_.apply(frame), config_.preprocessing);
     if constexpr (requires { measurement_.check_touch(config_, pre.pixels); })
       if (pre.accepted()) measurement_.check_touch(config_, pre.pixels);
     const std::vector<image<float>> view{pre.pixels};  // one scale: one view for every map
@@ -330,6 +337,7 @@ class basic_library_localizer {
   std::size_t calls_ = 0;
   std::size_t touches_ = 0;
   std::size_t restarts_ = 0;
+  detail::sensor_correction correction_{config_.calibrate_sensor, sensor_};
 };
 
 /// The library front door with the shipped models (`configured_models`).

@@ -50,6 +50,7 @@
 #include "tacmap/tactile/burst.hpp"
 #include "tacmap/tactile/frame.hpp"
 #include "tacmap/tactile/preprocess.hpp"
+#include "tacmap/tactile/self_calibration.hpp"
 
 namespace tacmap {
 
@@ -208,6 +209,24 @@ struct localizer_config {
   /// paper averaged 20 readings per press; the default drops a press's settling frames and
   /// outlier frames, then takes each taxel's median.
   burst_params burst{};
+  /// A sensor that calibrates itself (`self_calibration`, tactile/self_calibration.hpp): when
+  /// set, every frame is first seen by an online estimate of each taxel's gain and offset and
+  /// of dead or stuck taxels, and localized corrected (dead and stuck taxels filled in from
+  /// their neighbours: they never vote). The estimate outlives `reset()` (the sensor is the
+  /// same on the next object); `reset_sensor_calibration()` starts it again. Empty (the
+  /// default): frames are used as read. Measured on simulated worn sensors it localizes more
+  /// (harsh scenario, gecko and horse: 35 -> 39 of 44 sequences) and changes nothing a healthy
+  /// sensor localizes, but costs about 0.15 ms a touch, as much as an update on the paper's
+  /// grid: turn it on for a sensor that has seen use.
+  std::optional<self_calibration_params> calibrate_sensor;
+  /// Tracking (`bayes_filter::set_tracking`): once the belief is concentrated, a touch evaluates
+  /// the likelihood only where the belief is, carries the motion floor's share as one number
+  /// and checks the whole grid when the touch doubts the prediction and every
+  /// `recheck_every` touches (`default_tracking()`). Empty (the default): every touch
+  /// evaluates the whole grid, as before. Measured (tacmap-evaluate --tracking, realistic,
+  /// kidnaps): 145 against 147 of 175 kidnaps recovered within 3 touches, the verdict's ECE
+  /// unchanged; a localized touch on the paper's grid 165 -> 71 us, 36 headings 12.1 -> 1.9 ms.
+  std::optional<tracking_params> tracking;
   [[nodiscard]] double broad() const {
     return broad_probability.value_or(default_broad_probability);
   }
@@ -295,6 +314,8 @@ struct localizer_config {
                    "; expected a positive number of pixels between tactile patches (paper: 9), "
                    "or empty for the model's default");
     burst.validate();
+    if (calibrate_sensor) calibrate_sensor->validate();
+    if (tracking) tracking->validate();
     {
       preprocess_params p = preprocessing;  // mm_per_px is replaced by the map's
       p.mm_per_px = 1.0;
@@ -396,6 +417,37 @@ class preparation_over_budget : public std::runtime_error {
 };
 
 namespace detail {
+
+/// The localizers' optional self-calibrating sensor (`localizer_config::calibrate_sensor`).
+class sensor_correction {
+ public:
+  sensor_correction(const std::optional<self_calibration_params>& params,
+                    const taxel_geometry& geometry)
+      : params_(params), geometry_(geometry) {
+    reset();
+  }
+  /// The frame to localize: `frame` itself, or corrected once the estimate has seen it. Throws
+  /// (before anything changes) for a frame the estimate cannot take.
+  const tactile_frame& apply(const tactile_frame& frame) {
+    if (!estimate_) return frame;
+    estimate_->observe(frame);
+    corrected_ = estimate_->correct(frame).frame;
+    return corrected_;
+  }
+  [[nodiscard]] const tacmap::self_calibration* estimate() const {
+    return estimate_ ? &*estimate_ : nullptr;
+  }
+  void reset() {
+    estimate_.reset();
+    if (params_) estimate_.emplace(geometry_, *params_);
+  }
+
+ private:
+  std::optional<self_calibration_params> params_;
+  taxel_geometry geometry_;
+  std::optional<tacmap::self_calibration> estimate_;
+  tactile_frame corrected_;
+};
 
 /// Issue 33, "cost guard": per-window features of a descriptor D without H4 cost one
 /// `compute()` per window of the map (120 x 120 px: 8,000 windows; 600 x 512 px: 260,000, about
@@ -614,6 +666,19 @@ class configured_rotated_measurement {
   template <class G>
   void log_likelihood(const G& grid, const measurement_type& z, belief_array<G>& out) const {
     std::visit([&](const auto& m) { m.log_likelihood(grid, z, out); }, model_);
+  }
+
+  /// Tracking hook (measurement/concept.hpp): the chosen rotated model's bound.
+  [[nodiscard]] double log_likelihood_bound() const {
+    return std::visit([](const auto& m) { return static_cast<double>(m.log_likelihood_bound()); },
+                      model_);
+  }
+
+  /// Tracking hook: the chosen rotated model's `log_likelihood_on`.
+  template <class G>
+  void log_likelihood_on(const G& grid, const measurement_type& z, belief_array<G>& out,
+                         std::span<const state_range> states) const {
+    std::visit([&](const auto& m) { m.log_likelihood_on(grid, z, out, states); }, model_);
   }
 
  private:
@@ -1099,6 +1164,7 @@ class basic_localizer {
                    " has no (x, y, theta) model (pose_model and pose(), localizer.hpp P1); use "
                    "headings = 0 or give the policy a pose model");
     }
+    if (config_.tracking) with_filter([&](auto& f) { f.set_tracking(*config_.tracking); });
   }
 
   /// The first touch of an exploration (or one without motion since the previous touch).
@@ -1187,6 +1253,14 @@ class basic_localizer {
     restarts_ = 0;
     last_pose_.reset();
   }
+
+  /// The sensor's self-calibration (`localizer_config::calibrate_sensor`): each taxel's gain,
+  /// offset and status (`self_calibration::status`, `reason`), or nullptr when it is off.
+  [[nodiscard]] const self_calibration* sensor_calibration() const {
+    return correction_.estimate();
+  }
+  /// Forgets what the self-calibration learnt (a new or repaired sensor); `reset()` keeps it.
+  void reset_sensor_calibration() { correction_.reset(); }
 
   /// The belief over positions (summed over headings and appearances): one value per position
   /// of the sensor's centre, `positions().rows() x positions().cols()`; the position of element
@@ -1277,7 +1351,7 @@ class basic_localizer {
                    "frame's geometry");
     // Preprocess (and let the policy check the touch, P2) first: a malformed frame or a
     // descriptor that fails on it throws before anything changes.
-    const preprocessed_frame pre = preprocess(frame, config_.preprocessing);
+    const preprocessed_frame pre = preprocess(correction_.apply(frame), config_.preprocessing);
     if constexpr (requires { measurement_.check_touch(config_, pre.pixels); })
       if (pre.accepted()) measurement_.check_touch(config_, pre.pixels);
     touch_result r = with_filter([&](auto& f) { return run(f, pre, moved); });
@@ -1353,6 +1427,7 @@ class basic_localizer {
   std::size_t touches_ = 0;
   std::size_t restarts_ = 0;
   std::optional<arm_pose> last_pose_;
+  detail::sensor_correction correction_{config_.calibrate_sensor, sensor_};
 };
 
 /// The front door with the shipped models, chosen at run time by `localizer_config::model`

@@ -361,4 +361,70 @@ TEST_CASE("a burst of frames is one touch: settling and outlier frames do not vo
   CHECK(burst.touches() == 3);
 }
 
+TEST_CASE("a localizer with a self-calibrating sensor finds a dead taxel and keeps it past reset") {
+  const auto& p = gecko();
+  tacmap::localizer_config config = fast_config();
+  config.calibrate_sensor = tacmap::self_calibration_params{};
+  tacmap::localizer loc(p.map, p.mm_per_px, config);
+  REQUIRE(loc.sensor_calibration() != nullptr);
+  CHECK(tacmap::localizer(p.map, p.mm_per_px, fast_config()).sensor_calibration() == nullptr);
+  auto sim = gecko_simulator(21);
+  // Taxel (6, 2), in the middle of the array, reads nothing: a dead taxel.
+  const auto dead = [](tacmap::tactile_frame f) {
+    f.counts(6, 2) = 0.0F;
+    return f;
+  };
+  std::size_t touches = 0;
+  for (std::size_t q = 0; q < 4; ++q)
+    for (const auto& step : p.sequences[q]) {
+      (void)loc.touch(dead(sim.render(p.locations[step.location].pose())));
+      ++touches;
+      loc.reset();  // a new exploration: the sensor's estimate stays
+    }
+  CHECK(loc.sensor_calibration()->touches() == touches);
+  CHECK(loc.sensor_calibration()->status(6, 2) == tacmap::taxel_status::dead);
+  CHECK_FALSE(loc.sensor_calibration()->live()(6, 2));
+  // The corrected frame localizes as well as the healthy one where the dead taxel is filled in.
+  const auto& truth = p.locations[p.sequences[0][0].location];
+  const auto r = loc.touch(dead(sim.render(truth.pose())));
+  CHECK(r.accepted());
+  loc.reset_sensor_calibration();
+  CHECK(loc.sensor_calibration()->touches() == 0);
+  CHECK(loc.sensor_calibration()->status(6, 2) == tacmap::taxel_status::unestimated);
+  // Bad settings are refused up front.
+  config.calibrate_sensor->window = 0;
+  CHECK_THROWS_WITH_AS(tacmap::localizer(p.map, p.mm_per_px, config),
+                       doctest::Contains("window = 0"), std::invalid_argument);
+}
+
+TEST_CASE("localizer_config::tracking turns tracking on, and the tracked localizer agrees") {
+  const auto& p = gecko();
+  tacmap::localizer_config tracked_config;
+  tracked_config.tracking = tacmap::default_tracking();
+  tacmap::localizer full(p.map, p.mm_per_px);
+  tacmap::localizer tracked(p.map, p.mm_per_px, tracked_config);
+  REQUIRE(tracked.planar_filter() != nullptr);
+  CHECK(tracked.planar_filter()->tracking().epsilon == tacmap::default_tracking().epsilon);
+  CHECK(full.planar_filter()->tracking().epsilon == 0.0);
+  auto sim = gecko_simulator(31);
+  const auto& seq = p.sequences[1];
+  for (std::size_t t = 0; t < seq.size(); ++t) {
+    CAPTURE(t);
+    const auto& truth = p.locations[seq[t].location];
+    const auto frame = sim.render(truth.pose());
+    const auto a = t == 0 ? full.touch(frame) : full.touch(frame, seq[t].measured_motion);
+    const auto b = t == 0 ? tracked.touch(frame) : tracked.touch(frame, seq[t].measured_motion);
+    CHECK((b.position_mm - a.position_mm).norm() < 1.5);
+    CHECK(b.probability_within == doctest::Approx(a.probability_within).epsilon(0.02));
+    CHECK(b.verdict == a.verdict);
+  }
+  // With unknown heading the rotated model's tracking hook is reached too.
+  tracked_config.headings = 8;
+  tacmap::localizer pose(p.map, p.mm_per_px, tracked_config);
+  REQUIRE(pose.pose_filter() != nullptr);
+  CHECK(pose.pose_filter()->tracking().epsilon > 0.0);
+  const auto& truth = p.locations[seq[0].location];
+  CHECK(pose.touch(sim.render(truth.pose())).accepted());
+}
+
 }  // namespace test_localizer

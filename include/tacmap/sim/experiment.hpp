@@ -87,9 +87,6 @@ struct localization_config : localizer_config {
   /// the calibration, not localized): a sensor in use has a history, a 7-touch sequence alone
   /// is too short to estimate 84 taxels. Used only with `self_calibrate`.
   std::size_t calibration_warmup = 0;
-  /// Tracking mode (`bayes_filter::set_tracking`) for the filter, e.g. `default_tracking()`:
-  /// what a localizer that tracks by default runs. Empty: off.
-  std::optional<tracking_params> tracking;
 
   /// Throws std::invalid_argument for settings that contradict each other, naming both.
   void validate() const {
