@@ -102,14 +102,7 @@ int main(int argc, char** argv) try {
                                                   " is not a number of sequences; expected N >= 0 "
                                                   "(the first N of each map; 0 = all)");
   const tacmap_tools::map_sizing sizing =
-      native ? tacmap_tools::map_sizing{tacmap_tools::map_sizing::kind::native, 0}
-      : map_px_option->count() > 0
-          ? tacmap_tools::map_sizing{tacmap_tools::map_sizing::kind::square, map_px}
-          : tacmap_tools::map_sizing{tacmap_tools::map_sizing::kind::max_side, max_side};
-  if (!native)
-    tacmap_tools::check_map_px(sizing.px, sizing.how == tacmap_tools::map_sizing::kind::square
-                                              ? "--map-px"
-                                              : "--max-side");
+      tacmap_tools::chosen_sizing(native, map_px_option->count() > 0, map_px, max_side);
   if (photos.empty() && protocols.empty())
     throw CLI::ValidationError("maps",
                                "no map given; expected --photo FILE or --protocol FOLDER (at "

@@ -558,14 +558,7 @@ int main(int argc, char** argv) try {
                                                   "(the first N of each map; 0 = all)");
   max_sequences = static_cast<std::size_t>(sequences);
   const tacmap_tools::map_sizing sizing =
-      native ? tacmap_tools::map_sizing{tacmap_tools::map_sizing::kind::native, 0}
-      : map_px_option->count() > 0
-          ? tacmap_tools::map_sizing{tacmap_tools::map_sizing::kind::square, map_px}
-          : tacmap_tools::map_sizing{tacmap_tools::map_sizing::kind::max_side, max_side};
-  if (!native)
-    tacmap_tools::check_map_px(sizing.px, sizing.how == tacmap_tools::map_sizing::kind::square
-                                              ? "--map-px"
-                                              : "--max-side");
+      tacmap_tools::chosen_sizing(native, map_px_option->count() > 0, map_px, max_side);
   if (odometry_noise >= 0.0) faults.odometry_sigma_mm = odometry_noise;
   faults.oracle =
       parse_choice<tacmap::fault_oracle>("--fault-oracle", oracle_name,

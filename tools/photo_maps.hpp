@@ -56,6 +56,16 @@ inline void check_map_px(long long map_px, const char* option = "--map-px") {
                          "photograph's own size");
 }
 
+/// The sizing both tools' options choose: --native, else --map-px when given (a square), else
+/// --max-side (the aspect ratio kept); the size checked against the sensor's window.
+inline map_sizing chosen_sizing(bool native, bool square, long long map_px, long long max_side) {
+  if (native) return {map_sizing::kind::native, 0};
+  const map_sizing sizing = square ? map_sizing{map_sizing::kind::square, map_px}
+                                   : map_sizing{map_sizing::kind::max_side, max_side};
+  check_map_px(sizing.px, square ? "--map-px" : "--max-side");
+  return sizing;
+}
+
 /// A photograph as the map: grey intensities in [0, 1], resized by area as `sizing` says (by
 /// default its longer side to 120 px, the aspect ratio kept). Says on stderr what it did, so
 /// that nobody takes a resized map for the photograph's own.
