@@ -71,8 +71,11 @@ def check_cpp(block: Block, args) -> str | None:
         src = pathlib.Path(tmp) / "snippet.cpp"
         src.write_text(block.text, encoding="utf-8")
         cmd = [args.cxx, "-std=c++20", "-fsyntax-only", "-Wall", "-Wextra", "-Werror"]
-        cmd += [f"-I{d}" for d in args.include]
-        cmd += [f"-isystem{d}" for d in args.system_include] + [str(src)]
+        cmd += [f"-I{d}" for d in args.include if d]
+        # The compiler's own folders stay out: -isystem /usr/include would break libstdc++'s
+        # #include_next.
+        cmd += [f"-isystem{d}" for d in args.system_include
+                if d and d not in ("/usr/include", "/usr/local/include")] + [str(src)]
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
             return f"does not compile:\n{r.stderr[-4000:]}"
@@ -191,7 +194,7 @@ def main() -> int:
     ap.add_argument("files", nargs="*")
     args = ap.parse_args()
     root = pathlib.Path(args.source_dir)
-    files = [pathlib.Path(f) for f in args.files] or (
+    files = [pathlib.Path(f) for f in args.files if f] or (
         [root / "README.md"] + sorted((root / "docs").rglob("*.md")))
     blocks: list[Block] = []
     errors: list[str] = []
