@@ -60,8 +60,9 @@ soak_counts soak(std::uint64_t n, double p, std::uint64_t seed) {
     while (auto pk = parser.pop_frame()) {
       bool intact = false;
       if (pk->payload.size() >= 4) {  // the slot its timestamp names (every 20 ms)
-        const std::uint32_t t = pk->payload[0] | (pk->payload[1] << 8U) | (pk->payload[2] << 16U) |
-                                (std::uint32_t{pk->payload[3]} << 24U);
+        const std::uint32_t t =
+            std::uint32_t{pk->payload[0]} | (std::uint32_t{pk->payload[1]} << 8U) |
+            (std::uint32_t{pk->payload[2]} << 16U) | (std::uint32_t{pk->payload[3]} << 24U);
         intact = recent[(t / 20U) % recent.size()] == pk->payload;
       }
       if (intact) {
