@@ -246,12 +246,13 @@ TEST_CASE("most_probable_disc: a radius beyond the grid covers all of it, up to 
   f.set_prior(prior / prior.sum());
   const Eigen::Vector2d extent = (f.grid().state_mm(n - 1) - f.grid().state_mm(0)).cast<double>();
   const auto [covering_centre, covering_mass] = f.most_probable_disc(extent.norm() * 1.01);
-  CHECK(covering_mass == doctest::Approx(1.0).epsilon(1e-9));
+  // The whole belief: 1 up to the float belief's rounding (about 1e-7).
+  CHECK(covering_mass == doctest::Approx(1.0).epsilon(1e-6));
   for (const double radius :
        {extent.norm() * 3.0, 1e9, 1e127, 1e200, std::numeric_limits<double>::max()}) {
     CAPTURE(radius);
     const auto [centre, mass] = f.most_probable_disc(radius);
-    CHECK(mass == doctest::Approx(1.0).epsilon(1e-9));
+    CHECK(mass == doctest::Approx(1.0).epsilon(1e-6));
     CHECK((centre - covering_centre).norm() < 1e-9);
   }
 }
