@@ -11,24 +11,13 @@
 #include <vector>
 
 #include "tacmap/devices/weiss/codec.hpp"
+#include "tacmap/sim/random.hpp"
 
 namespace test_codec_soak {
 
 namespace {
 
 namespace w = tacmap::weiss;
-
-/// splitmix64: portable, so the counts below are the same on every platform.
-struct rng {
-  std::uint64_t state;
-  std::uint64_t next() {
-    std::uint64_t z = (state += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30U)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27U)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31U);
-  }
-  double uniform() { return static_cast<double>(next() >> 11U) * 0x1.0p-53; }
-};
 
 struct soak_counts {
   std::uint64_t frames = 0;
@@ -42,7 +31,7 @@ struct soak_counts {
 /// `n` frames, each byte replaced by a different random byte with probability `p`.
 soak_counts soak(std::uint64_t n, double p, std::uint64_t seed) {
   constexpr std::size_t cells = 84;
-  rng r{seed};
+  tacmap::sim_rng r(seed);  // portable: the counts below are the same on every platform
   w::packet_parser parser(w::protocol_family::wts);
   soak_counts c;
   std::vector<std::uint16_t> values(cells);
@@ -82,13 +71,13 @@ soak_counts soak(std::uint64_t n, double p, std::uint64_t seed) {
     }
   };
   for (std::uint64_t f = 0; f < n; ++f) {
-    for (auto& v : values) v = static_cast<std::uint16_t>(r.next() & w::max_cell_value);
+    for (auto& v : values) v = static_cast<std::uint16_t>(r.next_u64() & w::max_cell_value);
     const auto t = static_cast<std::uint32_t>(f * 20U);
     auto payload = w::encode_frame_payload(t, values, false);
     auto wire = w::encode_packet(w::protocol_family::wts, w::frame_id, payload);
     bool bad = false;
     while (next_bad < wire.size()) {
-      const auto replacement = static_cast<std::uint8_t>(1U + r.next() % 255U);
+      const auto replacement = static_cast<std::uint8_t>(1U + r.next_u64() % 255U);
       wire[next_bad] = static_cast<std::uint8_t>(wire[next_bad] ^ replacement);
       bad = true;
       next_bad += 1 + gap();

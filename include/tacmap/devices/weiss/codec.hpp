@@ -21,15 +21,16 @@
 // (94 37) or (9E F4) into two adjacent bytes with three or more bytes after them, and the CRC
 // is unchanged (a true CRC-16 catches every burst up to 16 bits).
 // Through `packet_parser`, 10^6 WTS frames of the 14 x 6 array with 1 % of their bytes
-// replaced at random: 838,117 frames hit, every clean frame arrived, and 132 hit frames passed
-// the CRC (1.6e-4 per hit frame, 10x 2^-16; the independent run saw 30 of 167,675,
-// 1.8e-4; 4 of the 132 passed as command replies, their id byte hit). It is not
+// replaced at random (tests/devices/test_codec_soak.cpp, tacmap::sim_rng seed as there):
+// 838,408 frames hit, every clean frame arrived, and 123 hit frames passed the CRC (1.5e-4 per
+// hit frame, 10x 2^-16; an independent run saw 30 of 167,675, 1.8e-4; 4 of the 123 passed as
+// command replies, their id byte hit). It is not
 // resynchronisation onto a false header (hunting restarts one byte into a rejected candidate,
 // and every frame that passed had the right size, 173 bytes) nor the length field
 // (a wrong size compares the CRC against payload bytes: 2^-16): it is the CRC itself.
 // What the protocol allows on top: `decode_frame_payload` checks the size (5 + 2 N bytes), that
 // every cell is 12-bit data (the top nibble of each cell's high byte is a free check) and RLE
-// counts, which rejects three quarters of those: 34 of the 10^6 (4.1e-5 per hit frame) also
+// counts, which rejects about 70 % of those: 36 of the 10^6 (4.3e-5 per hit frame) also
 // decoded, every one with its damage in bits that carry no redundancy (the cells' 12 data bits,
 // the timestamp, the flags). The protocol has no sequence number; the device timestamp's unit is
 // unconfirmed for the WTS and may restart after a power cycle, so a continuity check on it would
