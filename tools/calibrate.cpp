@@ -57,10 +57,8 @@ int main(int argc, char** argv) try {
   std::string model_name = "classic_sift", scenario_name = "realistic", curve_path;
   std::uint64_t seed = 101;
   long long sequences = 0;
-  long long max_side = tacmap_tools::default_map_px;  // signed: a negative size is refused
-  long long map_px = 0;                               // --map-px: a square map
-  long long patch_spacing = 0;                        // 0: the model's default
-  bool native = false;
+  tacmap_tools::map_sizing_options sizing_options;
+  long long patch_spacing = 0;  // 0: the model's default
   double tau_min = 0.01, tau_max = 10.0;
   double truth_radius = tacmap::tau_fit_params{}.truth_radius_mm;
   app.add_option("--photo", photos, "photograph(s) to use as maps (PNG/JPEG/PGM)")
@@ -74,16 +72,7 @@ int main(int argc, char** argv) try {
   app.add_option("--seed", seed, "seeds the simulator and the photographs' protocols (101)")
       ->check(CLI::NonNegativeNumber);  // an unsigned option: -1 would wrap
   app.add_option("--sequences", sequences, "use the first N sequences of each map (0 = all)");
-  auto* max_side_option = app.add_option(
-      "--max-side", max_side,
-      "the photographs' maps: the longer side, px, the aspect ratio kept (120; resized by area)");
-  auto* map_px_option =
-      app.add_option("--map-px", map_px,
-                     "the photographs' maps: N x N px instead, the aspect ratio not kept")
-          ->excludes(max_side_option);
-  app.add_flag("--native", native, "keep each photograph's own size as its map")
-      ->excludes(map_px_option)
-      ->excludes(max_side_option);
+  sizing_options.add_to(app);
   app.add_option("--spacing", patch_spacing,
                  "px between the tactile image's descriptor patches (default: classic_sift 13, "
                  "sift_lite 9)")
@@ -101,8 +90,7 @@ int main(int argc, char** argv) try {
     throw CLI::ValidationError("--sequences", std::to_string(sequences) +
                                                   " is not a number of sequences; expected N >= 0 "
                                                   "(the first N of each map; 0 = all)");
-  const tacmap_tools::map_sizing sizing =
-      tacmap_tools::chosen_sizing(native, map_px_option->count() > 0, map_px, max_side);
+  const tacmap_tools::map_sizing sizing = sizing_options.chosen();
   if (photos.empty() && protocols.empty())
     throw CLI::ValidationError("maps",
                                "no map given; expected --photo FILE or --protocol FOLDER (at "

@@ -411,9 +411,7 @@ int main(int argc, char** argv) try {
   // Exploration faults (sim/faults.hpp).
   tacmap::exploration_faults faults;
   std::size_t photo_touches = 7;
-  long long max_side = tacmap_tools::default_map_px;  // signed: a negative size is refused
-  long long map_px = 0;                               // --map-px: a square map
-  bool native = false;
+  tacmap_tools::map_sizing_options sizing_options;
   double odometry_noise = -1.0;
   app.add_option("--outliers", faults.outlier_probability,
                  "fault: probability that a move's odometry is off by --outlier-size")
@@ -471,16 +469,7 @@ int main(int argc, char** argv) try {
   app.add_option("--touches", photo_touches,
                  "touches per sequence of the photographs' protocols (7; the gecko's are fixed)")
       ->check(CLI::Range(1, 200));
-  auto* max_side_option = app.add_option(
-      "--max-side", max_side,
-      "the photographs' maps: the longer side, px, the aspect ratio kept (120; resized by area)");
-  auto* map_px_option =
-      app.add_option("--map-px", map_px,
-                     "the photographs' maps: N x N px instead, the aspect ratio not kept")
-          ->excludes(max_side_option);
-  app.add_flag("--native", native, "keep each photograph's own size as its map")
-      ->excludes(map_px_option)
-      ->excludes(max_side_option);
+  sizing_options.add_to(app);
   app.add_option("--sequences", sequences, "run only the first N sequences of each map (0 = all)");
   app.add_option("--seed", seed, "seeds the simulator and the photographs' protocols")
       ->check(CLI::NonNegativeNumber);  // an unsigned option: -1 would wrap
@@ -557,8 +546,7 @@ int main(int argc, char** argv) try {
                                                   " is not a number of sequences; expected N >= 0 "
                                                   "(the first N of each map; 0 = all)");
   max_sequences = static_cast<std::size_t>(sequences);
-  const tacmap_tools::map_sizing sizing =
-      tacmap_tools::chosen_sizing(native, map_px_option->count() > 0, map_px, max_side);
+  const tacmap_tools::map_sizing sizing = sizing_options.chosen();
   if (odometry_noise >= 0.0) faults.odometry_sigma_mm = odometry_noise;
   faults.oracle =
       parse_choice<tacmap::fault_oracle>("--fault-oracle", oracle_name,

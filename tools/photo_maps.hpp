@@ -2,6 +2,7 @@
 // and the generated touch protocol that tacmap-evaluate and tacmap-calibrate share.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -56,15 +57,36 @@ inline void check_map_px(long long map_px, const char* option = "--map-px") {
                          "photograph's own size");
 }
 
-/// The sizing both tools' options choose: --native, else --map-px when given (a square), else
-/// --max-side (the aspect ratio kept); the size checked against the sensor's window.
-inline map_sizing chosen_sizing(bool native, bool square, long long map_px, long long max_side) {
-  if (native) return {map_sizing::kind::native, 0};
-  const map_sizing sizing = square ? map_sizing{map_sizing::kind::square, map_px}
-                                   : map_sizing{map_sizing::kind::max_side, max_side};
-  check_map_px(sizing.px, square ? "--map-px" : "--max-side");
-  return sizing;
-}
+/// The options that size the photographs' maps, shared by both tools: --max-side (the
+/// default: the longer side, the aspect ratio kept), --map-px (a square) or --native.
+struct map_sizing_options {
+  long long max_side = default_map_px;  // signed: a negative size is refused
+  long long map_px = 0;
+  bool native = false;
+  CLI::Option* square = nullptr;
+
+  void add_to(CLI::App& app) {
+    auto* longer = app.add_option(
+        "--max-side", max_side,
+        "the photographs' maps: the longer side, px, the aspect ratio kept (120; resized by area)");
+    square = app.add_option("--map-px", map_px,
+                            "the photographs' maps: N x N px instead, the aspect ratio not kept")
+                 ->excludes(longer);
+    app.add_flag("--native", native, "keep each photograph's own size as its map")
+        ->excludes(square)
+        ->excludes(longer);
+  }
+
+  /// The sizing the options chose, its size checked against the sensor's window.
+  [[nodiscard]] map_sizing chosen() const {
+    if (native) return {map_sizing::kind::native, 0};
+    const bool is_square = square != nullptr && square->count() > 0;
+    const map_sizing sizing = is_square ? map_sizing{map_sizing::kind::square, map_px}
+                                        : map_sizing{map_sizing::kind::max_side, max_side};
+    check_map_px(sizing.px, is_square ? "--map-px" : "--max-side");
+    return sizing;
+  }
+};
 
 /// A photograph as the map: grey intensities in [0, 1], resized by area as `sizing` says (by
 /// default its longer side to 120 px, the aspect ratio kept). Says on stderr what it did, so
