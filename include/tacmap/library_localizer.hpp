@@ -247,16 +247,12 @@ class basic_library_localizer {
   /// The same touches with a press given as a burst of frames, combined by `combine_burst` with
   /// `config().burst` first (see `basic_localizer::touch`).
   library_touch_result touch(std::span<const tactile_frame> burst) {
-    const combined_burst combined = combine_burst(burst, config_.burst);
-    library_touch_result r = touch(combined.frame);
-    r.frames_combined = combined.used;
-    return r;
+    return detail::touch_with_burst(burst, config_.burst,
+                                    [&](const tactile_frame& f) { return touch(f); });
   }
   library_touch_result touch(std::span<const tactile_frame> burst, const odometry& moved) {
-    const combined_burst combined = combine_burst(burst, config_.burst);
-    library_touch_result r = touch(combined.frame, moved);
-    r.frames_combined = combined.used;
-    return r;
+    return detail::touch_with_burst(burst, config_.burst,
+                                    [&](const tactile_frame& f) { return touch(f, moved); });
   }
 
   /// Starts a new exploration: each object's prior, a uniform belief on each map.

@@ -418,6 +418,17 @@ class preparation_over_budget : public std::runtime_error {
 
 namespace detail {
 
+/// One touch from a press read as a burst: `combine_burst` first (it throws before anything
+/// changes), then `touch_one` with the combined frame; the result says how many frames it kept.
+template <class Touch>
+auto touch_with_burst(std::span<const tactile_frame> burst, const burst_params& params,
+                      Touch&& touch_one) {
+  const combined_burst combined = combine_burst(burst, params);
+  auto r = std::forward<Touch>(touch_one)(combined.frame);
+  r.frames_combined = combined.used;
+  return r;
+}
+
 /// The localizers' optional self-calibrating sensor (`localizer_config::calibrate_sensor`).
 class sensor_correction {
  public:
@@ -1233,16 +1244,20 @@ class basic_localizer {
   /// frame still settling or an outlier frame does not vote. Throws std::invalid_argument for
   /// an empty burst or frames of different geometry (naming them) before anything changes.
   touch_result touch(std::span<const tactile_frame> burst) {
-    return with_burst(burst, [&](const tactile_frame& f) { return touch(f); });
+    return detail::touch_with_burst(burst, config_.burst,
+                                    [&](const tactile_frame& f) { return touch(f); });
   }
   touch_result touch(std::span<const tactile_frame> burst, const odometry& moved) {
-    return with_burst(burst, [&](const tactile_frame& f) { return touch(f, moved); });
+    return detail::touch_with_burst(burst, config_.burst,
+                                    [&](const tactile_frame& f) { return touch(f, moved); });
   }
   touch_result touch(std::span<const tactile_frame> burst, const sensor_odometry& moved) {
-    return with_burst(burst, [&](const tactile_frame& f) { return touch(f, moved); });
+    return detail::touch_with_burst(burst, config_.burst,
+                                    [&](const tactile_frame& f) { return touch(f, moved); });
   }
   touch_result touch_at(std::span<const tactile_frame> burst, const arm_pose& where) {
-    return with_burst(burst, [&](const tactile_frame& f) { return touch_at(f, where); });
+    return detail::touch_with_burst(burst, config_.burst,
+                                    [&](const tactile_frame& f) { return touch_at(f, where); });
   }
 
   /// Starts a new exploration on the same map: a uniform belief, no previous pose.
@@ -1331,14 +1346,6 @@ class basic_localizer {
     if constexpr (has_headings)
       if (pose_) return std::forward<F>(f)(*pose_);
     return std::forward<F>(f)(*planar_);
-  }
-
-  template <class Touch>
-  touch_result with_burst(std::span<const tactile_frame> burst, Touch&& touch_one) {
-    const combined_burst combined = combine_burst(burst, config_.burst);
-    touch_result r = std::forward<Touch>(touch_one)(combined.frame);
-    r.frames_combined = combined.used;
-    return r;
   }
 
   touch_result step(const tactile_frame& frame, const std::optional<sensor_odometry>& moved) {
