@@ -22,6 +22,7 @@
 #include "tacmap/motion/odometry_gaussian.hpp"
 #include "tacmap/motion/pose_odometry_gaussian.hpp"
 #include "tacmap/motion/robust_motion.hpp"
+#include "tracking_support.hpp"
 
 namespace test_default_tracking {
 
@@ -55,21 +56,10 @@ const tacmap::image<float>& test_map() {
 
 // The window at (row, col) with a little deterministic noise: a touch, not an exact cut.
 tacmap::image<float> touch_at(Eigen::Index row, Eigen::Index col, unsigned seed) {
-  tacmap::image<float> z = test_map().block(row, col, window.height, window.width);
-  std::uint32_t state = seed * 2654435761U + 7U;
-  for (float& v : z.reshaped()) {
-    state ^= state << 13U;
-    state ^= state >> 17U;
-    state ^= state << 5U;
-    v += 0.03F * (static_cast<float>(state % 1000U) / 1000.0F - 0.5F);
-  }
-  return z;
+  return tacmap_test::noisy_window(test_map(), row, col, window, seed);
 }
 
-template <class A, class B>
-double total_variation(const A& a, const B& b) {
-  return 0.5 * (a.template cast<double>() - b.template cast<double>()).abs().sum();
-}
+using tacmap_test::total_variation;
 
 tacmap::planar_localizer_filter default_filter() {
   return tacmap::make_planar_filter(tacmap::localizer_config{}, test_map(), mm_per_px, window);

@@ -19,6 +19,7 @@
 #include "tacmap/motion/odometry_gaussian.hpp"
 #include "tacmap/testing/conformance.hpp"
 #include "test_support.hpp"
+#include "tracking_support.hpp"
 
 namespace test_tracking {
 
@@ -43,21 +44,10 @@ grid_t test_grid() {
 
 // The window at `cell` with a little deterministic noise: a realistic touch, not an exact cut.
 tacmap::image<float> touch_at(const tacmap::grid_cell& cell, unsigned seed = 1) {
-  tacmap::image<float> z = test_map().block(cell.row, cell.col, window.height, window.width);
-  std::uint32_t state = seed * 2654435761U + 7U;
-  for (float& v : z.reshaped()) {
-    state ^= state << 13U;
-    state ^= state >> 17U;
-    state ^= state << 5U;
-    v += 0.03F * (static_cast<float>(state % 1000U) / 1000.0F - 0.5F);
-  }
-  return z;
+  return tacmap_test::noisy_window(test_map(), cell.row, cell.col, window, seed);
 }
 
-template <class A, class B>
-double total_variation(const A& a, const B& b) {
-  return 0.5 * (a.template cast<double>() - b.template cast<double>()).abs().sum();
-}
+using tacmap_test::total_variation;
 
 // A prior concentrated around `cell`: a Gaussian of `sigma` px (what a localized filter's
 // prediction looks like).
