@@ -629,6 +629,19 @@ int main(int argc, char** argv) try {
                                                           : " Self-calibration: on, after " +
                                                                 std::to_string(self_calibrate) +
                                                                 " warm-up touches per sequence.";
+  if (!(std::isfinite(prior_unknown) && prior_unknown > 0.0 && prior_unknown < 1.0))
+    throw CLI::ValidationError("--prior-unknown",
+                               csv_number(prior_unknown) +
+                                   " is not a probability in (0, 1); expected the prior that the "
+                                   "touched surface is none of the maps (e.g. 0.5)");
+  const auto mode = parse_choice<tacmap_tools::library_mode>(
+      "--library-mode", library_mode_name,
+      {{"closed", tacmap_tools::library_mode::closed},
+       {"left-out", tacmap_tools::library_mode::left_out},
+       {"wrong-object", tacmap_tools::library_mode::wrong_object}});
+  if (mode != tacmap_tools::library_mode::closed && !library)
+    throw CLI::ValidationError("--library-mode",
+                               library_mode_name + " needs --library (the maps as one library)");
   std::vector<std::optional<double>> tau_values;
   for (const double t : taus) {
     if (!(std::isfinite(t) && t > 0.0))
@@ -839,12 +852,7 @@ int main(int argc, char** argv) try {
     const bool ok = tacmap_tools::run_library_evaluation(
         objects, configs,
         library_sequences > 0 ? static_cast<std::size_t>(library_sequences) : all_sequences,
-        max_sequences, seed, min_success, quiet, csv, library_params,
-        parse_choice<tacmap_tools::library_mode>(
-            "--library-mode", library_mode_name,
-            {{"closed", tacmap_tools::library_mode::closed},
-             {"left-out", tacmap_tools::library_mode::left_out},
-             {"wrong-object", tacmap_tools::library_mode::wrong_object}}));
+        max_sequences, seed, min_success, quiet, csv, library_params, mode);
     csv.close();
     if (!csv)
       tacmap::detail::fail<std::runtime_error>("tacmap-evaluate: writing '", output, "' failed");

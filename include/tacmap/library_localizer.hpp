@@ -7,7 +7,9 @@
 // photograph (`make_library_filter`), with the localizer's defaults — the latent appearance per
 // object, the robust motion, the calibrated measurement model. Each touch reports every object's
 // posterior, the most probable object and the position on its map, and a verdict whose
-// probability is the joint one: the right object *and* within the radius.
+// probability is the joint one: the right object *and* within the radius. Beside the objects,
+// "none of these" (filter/open_set.hpp): P(unknown), weighed by the same touches, which the
+// objects' posteriors and the verdict's probability leave room for.
 //
 // Photographs may come at different sizes and scales. The objects are compared by the absolute
 // log-likelihoods of their maps, and the shipped descriptors cover a fixed number of pixels: at
