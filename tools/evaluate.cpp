@@ -521,8 +521,9 @@ int main(int argc, char** argv) try {
       ->check(CLI::Range(0.0, 0.01));
   app.add_option("--library-mode", library_mode_name,
                  "--library: closed (every sequence's object in the library), left-out (open set: "
-                 "each sequence's own photograph left out of the library) or wrong-object (each "
-                 "object's touches on the next object's single map)")
+                 "each sequence's own photograph left out of the library), wrong-object (each "
+                 "object's touches on the next object's single map) or own-map (each object's "
+                 "touches on its own single map)")
       ->capture_default_str();
   app.add_option("--prior-unknown", prior_unknown,
                  "prior probability that the touched surface is none of the maps, in (0, 1)")
@@ -638,7 +639,8 @@ int main(int argc, char** argv) try {
       "--library-mode", library_mode_name,
       {{"closed", tacmap_tools::library_mode::closed},
        {"left-out", tacmap_tools::library_mode::left_out},
-       {"wrong-object", tacmap_tools::library_mode::wrong_object}});
+       {"wrong-object", tacmap_tools::library_mode::wrong_object},
+       {"own-map", tacmap_tools::library_mode::own_map}});
   if (mode != tacmap_tools::library_mode::closed && !library)
     throw CLI::ValidationError("--library-mode",
                                library_mode_name + " needs --library (the maps as one library)");

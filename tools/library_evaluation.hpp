@@ -31,8 +31,9 @@ struct library_tally {
   // Claims: "localized" that is false (another object, or 5 mm or more off; in the open-set and
   // wrong-object modes every one), at any touch and at the last, without and with the open set.
   std::size_t false_any = 0, false_last = 0, false_any_open = 0, false_last_open = 0;
-  std::size_t recognized_by_4_open = 0;  // recognized at touch 4, with the open set
-  std::vector<double> unknown_at_end;    // P(unknown) at the last touch
+  std::size_t right_last = 0, right_last_open = 0;  // a right "localized" at the last touch
+  std::size_t recognized_by_4_open = 0;             // recognized at touch 4, with the open set
+  std::vector<double> unknown_at_end;               // P(unknown) at the last touch
 
   void add(const tacmap::library_sequence_result& r) {
     ++sequences;
@@ -47,6 +48,8 @@ struct library_tally {
       if (t + 1 == r.touches.size()) {
         last = claim && wrong;
         last_open = claim_open && wrong;
+        right_last += claim && !wrong ? 1U : 0U;
+        right_last_open += claim_open && !wrong ? 1U : 0U;
       }
     }
     false_any += any ? 1U : 0U;
@@ -88,6 +91,7 @@ enum class library_mode {
   closed,        ///< the whole library (the touched object is in it)
   left_out,      ///< the library without the touched object: open set
   wrong_object,  ///< the single map of the next object (a localizer of another photograph)
+  own_map,       ///< the object's own single map (a localizer of its photograph)
 };
 
 inline const char* to_string(library_mode m) {
@@ -98,6 +102,8 @@ inline const char* to_string(library_mode m) {
       return "left-out";
     case library_mode::wrong_object:
       return "wrong-object";
+    case library_mode::own_map:
+      return "own-map";
   }
   return "?";
 }
@@ -140,10 +146,11 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
       if (max_sequences > 0) n = std::min(n, max_sequences);
       const auto index =
           std::min(n - 1, static_cast<std::size_t>(rng.uniform() * static_cast<double>(n)));
-      const auto r = mode == library_mode::left_out ? experiment.run_left_out(object, index)
-                     : mode == library_mode::wrong_object
-                         ? experiment.run_wrong_object(object, index)
-                         : experiment.run(object, index);
+      const auto r =
+          mode == library_mode::left_out       ? experiment.run_left_out(object, index)
+          : mode == library_mode::wrong_object ? experiment.run_wrong_object(object, index)
+          : mode == library_mode::own_map      ? experiment.run_single_map(object, index, object)
+                                               : experiment.run(object, index);
       total.add(r);
       per_object[object].add(r);
       if (!r.decided.empty()) ++confusion[object][r.decided.back()];
@@ -187,14 +194,18 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
       std::snprintf(pu, sizeof pu, "%.3f", tacmap::median(total.unknown_at_end));
     std::printf(
         "\n| configuration (%s; prior P(unknown) %g) | sequences | false \"localized\" at any "
-        "touch %%: without / with the unknown | at the last touch %% | recognized by touch 4 %% | "
-        "median P(unknown) at the last touch |\n|---|---|---|---|---|---|\n",
+        "touch %%: without / with the unknown | at the last touch %% | right \"localized\" at the "
+        "last touch %% | recognized by touch 4 %% | median P(unknown) at the last touch |\n"
+        "|---|---|---|---|---|---|---|\n",
         to_string(mode), config.open_set.prior_unknown);
-    std::printf("| %s | %zu | %s / %s | %s / %s | %s / %s | %s |\n\n", config.name().c_str(),
-                total.sequences, library_percent(total.false_any, total.sequences).c_str(),
+    std::printf("| %s | %zu | %s / %s | %s / %s | %s / %s | %s / %s | %s |\n\n",
+                config.name().c_str(), total.sequences,
+                library_percent(total.false_any, total.sequences).c_str(),
                 library_percent(total.false_any_open, total.sequences).c_str(),
                 library_percent(total.false_last, total.sequences).c_str(),
                 library_percent(total.false_last_open, total.sequences).c_str(),
+                library_percent(total.right_last, total.sequences).c_str(),
+                library_percent(total.right_last_open, total.sequences).c_str(),
                 library_percent(total.recognized_by_4, total.sequences).c_str(),
                 library_percent(total.recognized_by_4_open, total.sequences).c_str(), pu);
     // Per object, and the confusion matrix at the last touch.

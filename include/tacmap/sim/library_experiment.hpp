@@ -193,7 +193,18 @@ class library_experiment {
   /// object, `object_probability` P(this map | ...) = 1 - P(not this object).
   [[nodiscard]] library_sequence_result run_wrong_object(std::size_t object, std::size_t sequence) {
     check_object(object);
-    const std::size_t other = (object + 1) % objects_.size();
+    library_sequence_result out = run_single_map(object, sequence, (object + 1) % objects_.size());
+    out.wrong_object = true;
+    return out;
+  }
+
+  /// The sequence's touches (object `object`) through the single-map filter of object
+  /// `other`'s photograph, as a `localizer` of that photograph runs them (`other` == `object`:
+  /// the object's own map, the single-object case the open set must not spoil).
+  [[nodiscard]] library_sequence_result run_single_map(std::size_t object, std::size_t sequence,
+                                                       std::size_t other) {
+    check_object(object);
+    check_object(other);
     if (single_.size() != objects_.size()) single_.resize(objects_.size());
     const touch_protocol& p = *objects_[other].protocol;
     if (!single_[other]) {
@@ -203,7 +214,6 @@ class library_experiment {
     }
     sequence_result single = experiments_[object]->run(sequence, true);
     library_sequence_result out = start(object, sequence, single);
-    out.wrong_object = true;
     preprocess_params pp = config_.preprocessing;
     pp.mm_per_px = p.mm_per_px;  // what a localizer of that photograph is configured with
     replay(*single_[other], single, pp, out, [other](Eigen::Index) { return other; });
