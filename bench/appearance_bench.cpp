@@ -111,6 +111,27 @@ void planar_touch_localizer(benchmark::State& state) {
 }
 BENCHMARK(planar_touch_localizer)->Unit(benchmark::kMicrosecond);
 
+// What the open-set hypothesis (filter/open_set.hpp) adds to a localizer's touch: following the
+// update's report and the verdict against P(unknown) — the whole of its per-touch work (its
+// evidence is the update's own `log_prediction_support`). Compare with planar_touch_localizer
+// in the same run.
+void open_set_step(benchmark::State& state) {
+  tacmap::open_set unknown;
+  tacmap::update_report report;
+  tacmap::confidence c;
+  c.probability_within = 0.95;
+  c.verdict = tacmap::verdict::localized;
+  double support = 0.5;
+  for (auto _ : state) {
+    report.log_prediction_support = support;
+    support = -support;  // alternate, so that the odds stay finite
+    tacmap::detail::follow_touch(unknown, false, report);
+    const auto v = tacmap::with_open_set(c, unknown.probability_unknown(), {});
+    benchmark::DoNotOptimize(v);
+  }
+}
+BENCHMARK(open_set_step)->Unit(benchmark::kMicrosecond);
+
 void pose_touch_fixed(benchmark::State& state) {
   const auto map = bench_map();
   const auto grid = pose::paper(36);

@@ -258,6 +258,7 @@ std::string probability_text(double p) { return p < 0.001 ? "<0.001" : fixed(p, 
 void print_run(const run_result& run, const std::vector<demo_object>& objects) {
   std::printf("%5s", "touch");
   for (const auto& o : objects) std::printf(" %10s", ("P(" + o.name.substr(0, 7) + ")").c_str());
+  std::printf(" %10s", "P(unknown)");  // none of these (filter/open_set.hpp)
   std::printf(" %10s %9s %16s %-13s %12s\n", "leading", "error mm", "P(right, <=5mm)", "verdict",
               "known: error");
   for (std::size_t t = 0; t < run.touches.size(); ++t) {
@@ -265,6 +266,7 @@ void print_run(const run_result& run, const std::vector<demo_object>& objects) {
     std::printf("%5zu", t + 1);
     for (const double p : o.result.object_probability)
       std::printf(" %10s", probability_text(p).c_str());
+    std::printf(" %10s", probability_text(o.result.probability_unknown).c_str());
     const std::string error = std::isfinite(o.error_mm) ? fixed(o.error_mm, 2) : "-";
     std::printf(" %10s %9s %16.3f %-13s %9.2f mm%s\n", o.result.object_name.c_str(), error.c_str(),
                 o.result.probability_within, tacmap::to_string(o.result.verdict), o.known_error_mm,

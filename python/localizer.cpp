@@ -230,7 +230,13 @@ void bind_config(py::module_& m) {
                      "paper); N >= 1 over (x, y, theta) with N headings (descriptor models only; "
                      "odometry then in the sensor's frame).")
       .def_readwrite("turn_sigma_rad", &localizer_config::turn_sigma_rad,
-                     "Pose motion: turn noise (headings > 0), radians.");
+                     "Pose motion: turn noise (headings > 0), radians.")
+      .def_property(
+          "prior_unknown", [](const localizer_config& c) { return c.open_set.prior_unknown; },
+          [](localizer_config& c, double p) { c.open_set.prior_unknown = p; },
+          "The prior probability, in (0, 1), that the touched surface is not the map (C++ "
+          "open_set_params::prior_unknown): weighed against the map by the touches "
+          "(TouchResult.probability_other_object). 0.5: as likely unknown as known.");
   enum_property(cfg, "appearance", &localizer_config::appearance, appearance_names_,
                 "How the map's brightness relates to the object's height: 'fixed' (raised "
                 "parts look bright, as the paper's gecko), 'latent' (both relations are "
@@ -271,10 +277,26 @@ void bind_config(py::module_& m) {
            "'/tau=0.5' when tau is set, and so on.");
   keyword_struct<localizer_config>(
       cfg,
-      {"model", "pairs", "shape", "features", "tau", "tempering", "motion_sigma_mm", "motion_k",
-       "preprocessing", "confidence", "headings", "turn_sigma_rad", "appearance",
-       "appearance_switch", "lost_probability", "wide_probability", "wide_sigma_mm",
-       "broad_probability", "broad_sigma_mm"},
+      {"model",
+       "pairs",
+       "shape",
+       "features",
+       "tau",
+       "tempering",
+       "motion_sigma_mm",
+       "motion_k",
+       "preprocessing",
+       "confidence",
+       "headings",
+       "turn_sigma_rad",
+       "prior_unknown",
+       "appearance",
+       "appearance_switch",
+       "lost_probability",
+       "wide_probability",
+       "wide_sigma_mm",
+       "broad_probability",
+       "broad_sigma_mm"},
       "Everything that configures the filter a Localizer (or a simulated experiment) runs (C++ "
       "tacmap::localizer_config): the measurement model, the motion model, the latent "
       "appearance, preprocessing and the verdict. The defaults are the best measured (README, "
@@ -349,6 +371,11 @@ void bind_localizer(py::module_& m) {
       .def_readonly("heading_probability", &touch_result::heading_probability,
                     "P(|heading - heading_rad| <= heading tolerance); 1 when the heading is "
                     "known.")
+      .def_readonly("probability_other_object", &touch_result::probability_other_object,
+                    "P(not this object): the touches come from a surface other than the map's "
+                    "(LocalizerConfig.prior_unknown, weighed by the touches). probability_within "
+                    "is given this object; 'localized' needs (1 - probability_other_object) x "
+                    "probability_within at the threshold.")
       .def_property_readonly(
           "most_probable_mm",
           [](const touch_result& r) {

@@ -303,6 +303,8 @@ int main(int argc, char** argv) try {
   bool library = false;
   long long library_sequences = -1;  // -1: as many as the maps' sequences together
   tacmap::library_likelihood_params library_params;
+  std::string library_mode_name = "closed";
+  double prior_unknown = tacmap::open_set_params{}.prior_unknown;
   // Overrides of the scenario's knobs: empty = the scenario's value.
   struct knob {
     const char* flag;
@@ -517,6 +519,15 @@ int main(int argc, char** argv) try {
   app.add_option("--prune-below", library_params.prune_below,
                  "--library: posterior below which an object is no longer evaluated (1e-9)")
       ->check(CLI::Range(0.0, 0.01));
+  app.add_option("--library-mode", library_mode_name,
+                 "--library: closed (every sequence's object in the library), left-out (open set: "
+                 "each sequence's own photograph left out of the library), wrong-object (each "
+                 "object's touches on the next object's single map) or own-map (each object's "
+                 "touches on its own single map)")
+      ->capture_default_str();
+  app.add_option("--prior-unknown", prior_unknown,
+                 "prior probability that the touched surface is none of the maps, in (0, 1)")
+      ->capture_default_str();
   app.add_flag("--quiet,-q", quiet, "no progress bar (it is drawn only when stderr is a terminal)");
   app.add_option("--scenario", scenario_name,
                  "ideal (the map's own image, a new sensor), realistic (camera map, "
@@ -619,6 +630,20 @@ int main(int argc, char** argv) try {
                                                           : " Self-calibration: on, after " +
                                                                 std::to_string(self_calibrate) +
                                                                 " warm-up touches per sequence.";
+  if (!(std::isfinite(prior_unknown) && prior_unknown > 0.0 && prior_unknown < 1.0))
+    throw CLI::ValidationError("--prior-unknown",
+                               csv_number(prior_unknown) +
+                                   " is not a probability in (0, 1); expected the prior that the "
+                                   "touched surface is none of the maps (e.g. 0.5)");
+  const auto mode = parse_choice<tacmap_tools::library_mode>(
+      "--library-mode", library_mode_name,
+      {{"closed", tacmap_tools::library_mode::closed},
+       {"left-out", tacmap_tools::library_mode::left_out},
+       {"wrong-object", tacmap_tools::library_mode::wrong_object},
+       {"own-map", tacmap_tools::library_mode::own_map}});
+  if (mode != tacmap_tools::library_mode::closed && !library)
+    throw CLI::ValidationError("--library-mode",
+                               library_mode_name + " needs --library (the maps as one library)");
   std::vector<std::optional<double>> tau_values;
   for (const double t : taus) {
     if (!(std::isfinite(t) && t > 0.0))
@@ -644,6 +669,7 @@ int main(int argc, char** argv) try {
     base.motion_k = motion_k;
     if (patch_spacing > 0) base.patch_spacing = patch_spacing;
     base.simulator_seed = seed;
+    base.open_set.prior_unknown = prior_unknown;
     base.simulator = sim;
     base.scenario = effects;
     base.faults = faults;
@@ -828,7 +854,7 @@ int main(int argc, char** argv) try {
     const bool ok = tacmap_tools::run_library_evaluation(
         objects, configs,
         library_sequences > 0 ? static_cast<std::size_t>(library_sequences) : all_sequences,
-        max_sequences, seed, min_success, quiet, csv, library_params);
+        max_sequences, seed, min_success, quiet, csv, library_params, mode);
     csv.close();
     if (!csv)
       tacmap::detail::fail<std::runtime_error>("tacmap-evaluate: writing '", output, "' failed");

@@ -28,8 +28,38 @@ struct library_tally {
   std::vector<double> evaluated;        // per touch number: objects evaluated, summed
   std::vector<std::size_t> touches_at;  // per touch number: how many sequences have one
 
+  // Claims: "localized" that is false (another object, or 5 mm or more off; in the open-set and
+  // wrong-object modes every one), at any touch and at the last, without and with the open set.
+  std::size_t false_any = 0, false_last = 0, false_any_open = 0, false_last_open = 0;
+  std::size_t right_last = 0, right_last_open = 0;  // a right "localized" at the last touch
+  std::size_t recognized_by_4_open = 0;             // recognized at touch 4, with the open set
+  std::vector<double> unknown_at_end;               // P(unknown) at the last touch
+
   void add(const tacmap::library_sequence_result& r) {
     ++sequences;
+    const bool all_false = r.open_set || r.wrong_object;
+    bool any = false, any_open = false, last = false, last_open = false;
+    for (std::size_t t = 0; t < r.touches.size(); ++t) {
+      const bool wrong = all_false || r.decided[t] != r.object || !(r.touches[t].error_mm < 5.0);
+      const bool claim = r.touches[t].verdict == tacmap::verdict::localized;
+      const bool claim_open = r.open_set_verdict[t] == tacmap::verdict::localized;
+      any = any || (claim && wrong);
+      any_open = any_open || (claim_open && wrong);
+      if (t + 1 == r.touches.size()) {
+        last = claim && wrong;
+        last_open = claim_open && wrong;
+        right_last += claim && !wrong ? 1U : 0U;
+        right_last_open += claim_open && !wrong ? 1U : 0U;
+      }
+    }
+    false_any += any ? 1U : 0U;
+    false_last += last ? 1U : 0U;
+    false_any_open += any_open ? 1U : 0U;
+    false_last_open += last_open ? 1U : 0U;
+    if (!r.probability_unknown.empty()) unknown_at_end.push_back(r.probability_unknown.back());
+    recognized_by_4_open +=
+        !all_false && r.recognized_with_unknown_at(std::min<std::size_t>(4, r.touches.size())) ? 1U
+                                                                                               : 0U;
     const std::size_t n = r.touches.size();
     if (recognized.size() < n) {
       recognized.resize(n);
@@ -56,6 +86,28 @@ inline std::string library_percent(std::size_t k, std::size_t n) {
   return buf;
 }
 
+/// What a library evaluation runs each sequence through (tacmap-evaluate --library-mode).
+enum class library_mode {
+  closed,        ///< the whole library (the touched object is in it)
+  left_out,      ///< the library without the touched object: open set
+  wrong_object,  ///< the single map of the next object (a localizer of another photograph)
+  own_map,       ///< the object's own single map (a localizer of its photograph)
+};
+
+inline const char* to_string(library_mode m) {
+  switch (m) {
+    case library_mode::closed:
+      return "closed";
+    case library_mode::left_out:
+      return "left-out";
+    case library_mode::wrong_object:
+      return "wrong-object";
+    case library_mode::own_map:
+      return "own-map";
+  }
+  return "?";
+}
+
 /// Runs `sequences` library sequences per configuration over `objects` (each with its
 /// protocol), printing the tables (Markdown) to stdout and one row per touch to `csv`. Returns
 /// false when a localization rate is below `min_success` (a fraction; negative: no floor).
@@ -64,9 +116,11 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
                                    std::size_t sequences, std::size_t max_sequences,
                                    std::uint64_t seed, double min_success, bool quiet,
                                    std::ostream& csv,
-                                   const tacmap::library_likelihood_params& params = {}) {
-  csv << "config,object,sequence,touch,decided,p_true_object,p_decided,error_mm,known_error_mm,"
-         "probability_within,verdict,objects_evaluated,raised_dark\n";
+                                   const tacmap::library_likelihood_params& params = {},
+                                   library_mode mode = library_mode::closed) {
+  csv << "config,mode,object,sequence,touch,decided,p_true_object,p_decided,error_mm,"
+         "known_error_mm,probability_within,verdict,objects_evaluated,raised_dark,p_unknown,"
+         "log_open_set_factor,open_set_verdict\n";
   bool below_floor = false;
   const std::size_t k_objects = objects.size();
   std::printf(
@@ -92,19 +146,25 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
       if (max_sequences > 0) n = std::min(n, max_sequences);
       const auto index =
           std::min(n - 1, static_cast<std::size_t>(rng.uniform() * static_cast<double>(n)));
-      const auto r = experiment.run(object, index);
+      const auto r =
+          mode == library_mode::left_out       ? experiment.run_left_out(object, index)
+          : mode == library_mode::wrong_object ? experiment.run_wrong_object(object, index)
+          : mode == library_mode::own_map      ? experiment.run_single_map(object, index, object)
+                                               : experiment.run(object, index);
       total.add(r);
       per_object[object].add(r);
       if (!r.decided.empty()) ++confusion[object][r.decided.back()];
       for (std::size_t t = 0; t < r.touches.size(); ++t) {
-        char line[512];
-        std::snprintf(line, sizeof line, "%s,%s,%zu,%zu,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%s,%zu,%d\n",
-                      config.name().c_str(), objects[object].name.c_str(), index, t + 1,
-                      objects[r.decided[t]].name.c_str(), r.object_probability[t][object],
+        char line[640];
+        std::snprintf(line, sizeof line,
+                      "%s,%s,%s,%zu,%zu,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%s,%zu,%d,%.6g,%.6g,%s\n",
+                      config.name().c_str(), to_string(mode), objects[object].name.c_str(), index,
+                      t + 1, objects[r.decided[t]].name.c_str(), r.object_probability[t][object],
                       r.object_probability[t][r.decided[t]], r.touches[t].error_mm,
                       r.known_object[t].error_mm, r.touches[t].probability_within,
                       tacmap::to_string(r.touches[t].verdict), r.evaluated_objects[t],
-                      r.raised_dark ? 1 : 0);
+                      r.raised_dark ? 1 : 0, r.probability_unknown[t], r.log_open_set_factor[t],
+                      tacmap::to_string(r.open_set_verdict[t]));
         csv << line;
       }
       if (!quiet) std::fprintf(stderr, "\r%zu/%zu sequences", q + 1, sequences);
@@ -128,6 +188,26 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
                 library_percent(total.localized, total.sequences).c_str(),
                 library_percent(total.localized_known, total.sequences).c_str(), ttr,
                 total.wrong_at_end, evaluated.c_str());
+    // False claims and recognition, without and with the open-set hypothesis.
+    char pu[32] = "-";
+    if (!total.unknown_at_end.empty())
+      std::snprintf(pu, sizeof pu, "%.3f", tacmap::median(total.unknown_at_end));
+    std::printf(
+        "\n| configuration (%s; prior P(unknown) %g) | sequences | false \"localized\" at any "
+        "touch %%: without / with the unknown | at the last touch %% | right \"localized\" at the "
+        "last touch %% | recognized by touch 4 %% | median P(unknown) at the last touch |\n"
+        "|---|---|---|---|---|---|---|\n",
+        to_string(mode), config.open_set.prior_unknown);
+    std::printf("| %s | %zu | %s / %s | %s / %s | %s / %s | %s / %s | %s |\n\n",
+                config.name().c_str(), total.sequences,
+                library_percent(total.false_any, total.sequences).c_str(),
+                library_percent(total.false_any_open, total.sequences).c_str(),
+                library_percent(total.false_last, total.sequences).c_str(),
+                library_percent(total.false_last_open, total.sequences).c_str(),
+                library_percent(total.right_last, total.sequences).c_str(),
+                library_percent(total.right_last_open, total.sequences).c_str(),
+                library_percent(total.recognized_by_4, total.sequences).c_str(),
+                library_percent(total.recognized_by_4_open, total.sequences).c_str(), pu);
     // Per object, and the confusion matrix at the last touch.
     std::printf(
         "\n| object (%s) | raised parts in the photo | sequences | recognized by touch 4 | "

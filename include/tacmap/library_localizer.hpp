@@ -7,7 +7,9 @@
 // photograph (`make_library_filter`), with the localizer's defaults — the latent appearance per
 // object, the robust motion, the calibrated measurement model. Each touch reports every object's
 // posterior, the most probable object and the position on its map, and a verdict whose
-// probability is the joint one: the right object *and* within the radius.
+// probability is the joint one: the right object *and* within the radius. Beside the objects,
+// "none of these" (filter/open_set.hpp): P(unknown), weighed by the same touches, which the
+// objects' posteriors and the verdict's probability leave room for.
 //
 // Photographs may come at different sizes and scales. The objects are compared by the absolute
 // log-likelihoods of their maps, and the shipped descriptors cover a fixed number of pixels: at
@@ -30,6 +32,7 @@
 
 #include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/filter/confidence.hpp"
+#include "tacmap/filter/open_set.hpp"
 #include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/grid/library_grid.hpp"
 #include "tacmap/grid/planar_grid.hpp"
@@ -181,14 +184,18 @@ struct library_touch_result {
   /// The most probable object (index into the library) and its name.
   Eigen::Index object = 0;
   std::string object_name;
-  /// Every object's posterior (the library's order).
+  /// Every object's posterior (the library's order); with `probability_unknown` they sum to 1.
   std::vector<double> object_probability;
+  /// P(none of these): the touched object is not in the library (filter/open_set.hpp), from
+  /// `localizer_config::open_set`'s prior and the touches' evidence.
+  double probability_unknown = 0.0;
   /// Other objects as probable as `object` (identical maps): the position holds on each.
   std::vector<Eigen::Index> tied_objects;
   /// The estimate on `object`'s map (mm): the centre of the disc of `confidence.radius_mm` that
   /// holds the most belief.
   Eigen::Vector2d position_mm = Eigen::Vector2d::Zero();
-  /// P(object is right and |position - position_mm| <= radius).
+  /// P(object is right and |position - position_mm| <= radius): the object is in the library,
+  /// is `object`, and the position is within the radius.
   double probability_within = 0.0;
   /// `object`'s appearance hypotheses' posteriors (as photographed, inverted).
   std::vector<double> appearance_probability;
@@ -261,6 +268,7 @@ class basic_library_localizer {
     calls_ = 0;
     touches_ = 0;
     restarts_ = 0;
+    unknown_.reset();
   }
 
   /// The sensor's self-calibration (see `basic_localizer::sensor_calibration`), or nullptr.
@@ -280,6 +288,8 @@ class basic_library_localizer {
   /// Touches used and restarts from uniform since construction or `reset()`.
   [[nodiscard]] std::size_t touches() const { return touches_; }
   [[nodiscard]] std::size_t restarts() const { return restarts_; }
+  /// P(none of these) after the last touch (`library_touch_result::probability_unknown`).
+  [[nodiscard]] double probability_unknown() const { return unknown_.probability_unknown(); }
   /// Object k's position belief (summed over its appearance hypotheses), conditioned on k, as
   /// an image of its grid's positions; throws std::domain_error when k has posterior 0.
   [[nodiscard]] image<float> object_belief_image(Eigen::Index k) const {
@@ -312,14 +322,26 @@ class basic_library_localizer {
     library_touch_result r;
     r.restarted = out.restarted;
     r.rejection = pre.rejection;
+    // The open set's population is the states evaluated: the objects not pruned.
+    const auto& grid = filter_.grid();
+    const std::vector<bool>& used = filter_.measurement_model().evaluated();
+    Eigen::Index evaluated = used.empty() ? grid.size() : 0;
+    for (std::size_t k = 0; k < used.size(); ++k)
+      if (used[k]) evaluated += grid.object_size(static_cast<Eigen::Index>(k));
+    detail::follow_touch(unknown_, out.restarted, out.report,
+                         static_cast<double>(evaluated) / static_cast<double>(grid.size()));
+    r.probability_unknown = unknown_.probability_unknown();
+    const confidence conf =
+        with_open_set(out.assessment, r.probability_unknown, config_.confidence);
     const auto& est = out.estimate;
-    r.verdict = pre.accepted() ? out.assessment.verdict : verdict::rejected_frame;
+    r.verdict = pre.accepted() ? conf.verdict : verdict::rejected_frame;
     r.object = est.map_object;
-    r.object_name = filter_.grid().object_name(est.map_object);
+    r.object_name = grid.object_name(est.map_object);
     r.object_probability = est.object_probability;
+    for (double& p : r.object_probability) p *= 1.0 - r.probability_unknown;
     r.tied_objects = est.tied_objects;
-    r.position_mm = out.assessment.centre_mm;
-    r.probability_within = out.assessment.probability_within;
+    r.position_mm = conf.centre_mm;
+    r.probability_within = conf.probability_within;
     r.appearance_probability = est.hypothesis_probability;
     if (out.report) r.log_prediction_support = out.report->log_prediction_support;
     r.touches = touches_;
@@ -334,6 +356,7 @@ class basic_library_localizer {
   std::size_t touches_ = 0;
   std::size_t restarts_ = 0;
   detail::sensor_correction correction_{config_.calibrate_sensor, sensor_};
+  open_set unknown_{config_.open_set};  // P(none of these)
 };
 
 /// The library front door with the shipped models (`configured_models`).

@@ -35,6 +35,7 @@
 #include "tacmap/detail/type_name.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/filter/confidence.hpp"
+#include "tacmap/filter/open_set.hpp"
 #include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/grid/planar_grid.hpp"
 #include "tacmap/grid/pose_grid.hpp"
@@ -145,6 +146,10 @@ struct localizer_config {
   preprocess_params preprocessing{};  ///< frame thresholds; mm_per_px is replaced by the map's
   /// When the verdict is "localized" or "contradicted" (`assess`).
   confidence_params confidence{};
+  /// "None of these": the prior that the touched surface is not the map (a library: none of
+  /// its maps), weighed by the touches against the map (filter/open_set.hpp); the verdict needs
+  /// the map and the position to beat it.
+  open_set_params open_set{};
   /// Unknown orientation (issue 6): 0 localizes over (x, y) with the heading known (the paper);
   /// N >= 1 localizes over (x, y, theta) with a `pose_grid` of N headings, the
   /// `rotated_descriptor_likelihood` (descriptor models only) and sensor-frame odometry.
@@ -287,6 +292,7 @@ struct localizer_config {
   /// tacmap/detail/setting_ranges.hpp), before anything is prepared.
   void validate() const {
     confidence.validate();
+    open_set.validate();
     detail::check_range("localizer_config", "motion_sigma_mm", motion_sigma_mm,
                         detail::min_sigma_mm, detail::max_sigma_mm, " mm",
                         "the odometry's noise per axis", "the paper uses 1");
@@ -999,6 +1005,11 @@ struct touch_result {
   double probability_within = 0.0;
   /// P(|heading - heading_rad| <= heading tolerance); 1 when the heading is known.
   double heading_probability = 1.0;
+  /// P(not this object): the touches come from a surface other than the map's, weighed against
+  /// the map from `localizer_config::open_set`'s prior (filter/open_set.hpp). The two
+  /// probabilities above are given this object; "localized" needs P(this object) x
+  /// `probability_within` at the threshold.
+  double probability_other_object = 0.0;
   /// The single most probable state's position (mm) and the belief's covariance of position
   /// (mm^2), entropy over positions (nats).
   Eigen::Vector2d most_probable_mm = Eigen::Vector2d::Zero();
@@ -1267,6 +1278,7 @@ class basic_localizer {
     touches_ = 0;
     restarts_ = 0;
     last_pose_.reset();
+    other_object_.reset();
   }
 
   /// The sensor's self-calibration (`localizer_config::calibrate_sensor`): each taxel's gain,
@@ -1384,8 +1396,12 @@ class basic_localizer {
     r.restarted = out.restarted;
     r.rejection = pre.rejection;
     const auto& est = out.estimate;
+    detail::follow_touch(other_object_, out.restarted, out.report);
+    r.probability_other_object = other_object_.probability_unknown();
     const confidence& conf = out.assessment;
-    r.verdict = pre.accepted() ? conf.verdict : verdict::rejected_frame;
+    r.verdict = pre.accepted()
+                    ? with_open_set(conf, r.probability_other_object, config_.confidence).verdict
+                    : verdict::rejected_frame;
     r.position_mm = conf.centre_mm;
     r.probability_within = conf.probability_within;
     r.heading_probability = conf.heading_probability;
@@ -1435,6 +1451,7 @@ class basic_localizer {
   std::size_t restarts_ = 0;
   std::optional<arm_pose> last_pose_;
   detail::sensor_correction correction_{config_.calibrate_sensor, sensor_};
+  open_set other_object_{config_.open_set};  // P(not this object)
 };
 
 /// The front door with the shipped models, chosen at run time by `localizer_config::model`

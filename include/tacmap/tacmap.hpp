@@ -7,6 +7,7 @@
 #include "tacmap/descriptor/concept.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/filter/confidence.hpp"
+#include "tacmap/filter/open_set.hpp"
 #include "tacmap/grid/concept.hpp"
 #include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/grid/library_grid.hpp"

@@ -57,7 +57,7 @@ TEST_CASE("library_localizer: touches on the gecko recognise it among other maps
     r = t == 0 ? loc.touch(frame) : loc.touch(frame, sequence[t].measured_motion);
     CHECK(r.accepted());
     REQUIRE(r.object_probability.size() == 3);
-    double sum = 0.0;
+    double sum = r.probability_unknown;  // the objects and "none of these"
     for (const double q : r.object_probability) sum += q;
     CHECK(sum == doctest::Approx(1.0).epsilon(1e-5));
   }
@@ -93,7 +93,7 @@ TEST_CASE("library_localizer: a move off every map restarts the paper's configur
   // Restarted before the update: the touch is weighed against the prior, which supports it.
   CHECK(r.log_prediction_support <= 1e-6);  // 0 up to the sums' rounding
   CHECK(r.log_prediction_support > -1.0);
-  double sum = 0.0;
+  double sum = r.probability_unknown;
   for (const double q : r.object_probability) {
     CHECK(std::isfinite(q));
     sum += q;

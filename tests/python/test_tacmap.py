@@ -106,6 +106,46 @@ class TestLocalizerDefaults(unittest.TestCase):
                                    [right - half, bottom - half])
 
 
+class TestOpenSet(unittest.TestCase):
+    """P(not this object): the touches weighed against another surface than the map's."""
+
+    @staticmethod
+    def blobs(shape, seed):
+        rng = np.random.default_rng(seed)
+        y, x = np.mgrid[0:shape[0], 0:shape[1]]
+        out = np.zeros(shape)
+        for _ in range(60):
+            cy, cx = rng.uniform(0, shape[0]), rng.uniform(0, shape[1])
+            s = rng.uniform(2.0, 6.0)
+            out += rng.choice([-1.0, 1.0]) * np.exp(-0.5 * ((y - cy) ** 2 + (x - cx) ** 2) / s**2)
+        return out.astype(np.float32)
+
+    def test_rises_on_another_object_and_falls_on_its_own(self):
+        p = gecko()
+        own = tacmap.Localizer(p.map, p.mm_per_px, fast_config())
+        other = tacmap.Localizer(self.blobs(p.map.shape, 11), p.mm_per_px, fast_config())
+        on_own, _ = run_sequence(own, simulator(70), 0)
+        on_other, _ = run_sequence(other, simulator(70), 0)
+        for results in (on_own, on_other):
+            # The first touch's prediction is uniform: no evidence either way.
+            self.assertAlmostEqual(results[0].probability_other_object, 0.5, places=6)
+        self.assertLess(on_own[-1].probability_other_object, 0.01)
+        self.assertEqual(on_own[-1].verdict, "localized")
+        self.assertGreater(on_other[-1].probability_other_object, 0.9)
+        for r in on_other:
+            self.assertNotEqual(r.verdict, "localized")
+
+    def test_prior_is_configured_and_checked(self):
+        p = gecko()
+        loc = tacmap.Localizer(p.map, p.mm_per_px, fast_config(prior_unknown=0.2))
+        self.assertEqual(loc.config.prior_unknown, 0.2)
+        results, _ = run_sequence(loc, simulator(71), 0)
+        self.assertAlmostEqual(results[0].probability_other_object, 0.2, places=6)
+        for bad in (0.0, 1.0, -0.5, float("nan")):
+            with self.assertRaisesRegex(ValueError, "prior_unknown"):
+                fast_config(prior_unknown=bad)
+
+
 class TestLocalizer(unittest.TestCase):
     def test_rejected_frame_keeps_the_count_and_applies_the_motion(self):
         p = gecko()

@@ -24,6 +24,7 @@
 #include <utility>
 #include <vector>
 
+#include "tacmap/filter/open_set.hpp"
 #include "tacmap/library_localizer.hpp"
 #include "tacmap/sim/experiment.hpp"
 
@@ -52,12 +53,28 @@ struct library_sequence_result {
   std::vector<std::size_t> decided;
   /// After each touch: the objects the library filter evaluated (pruning).
   std::vector<std::size_t> evaluated_objects;
+  /// After each touch: P(none of the maps) with the configuration's prior
+  /// (`localizer_config::open_set`, filter/open_set.hpp), the touch's log Bayes factor of the
+  /// maps against the unknown (0 for a rejected frame), and the verdict with the open set
+  /// (`with_open_set`; `touches[t].verdict` is the filter's own, without it). The object
+  /// posteriors in `object_probability` are the filter's, given one of the maps.
+  std::vector<double> probability_unknown;
+  std::vector<double> log_open_set_factor;
+  std::vector<tacmap::verdict> open_set_verdict;
+  bool open_set = false;      ///< `run_left_out`: the touched object was not in the library
+  bool wrong_object = false;  ///< `run_wrong_object`: touches on another object's single map
 
   /// True when after touch `t` (1-based) the touched object is the most probable one with a
   /// posterior above `threshold`.
   [[nodiscard]] bool recognized_at(std::size_t t, double threshold = 0.9) const {
     return t >= 1 && t <= decided.size() && decided[t - 1] == object &&
            object_probability[t - 1][object] > threshold;
+  }
+  /// As `recognized_at`, with the open set: the object's posterior times P(one of the maps)
+  /// (`probability_unknown`) above `threshold`.
+  [[nodiscard]] bool recognized_with_unknown_at(std::size_t t, double threshold = 0.9) const {
+    return recognized_at(t, 0.0) &&
+           object_probability[t - 1][object] * (1.0 - probability_unknown[t - 1]) > threshold;
   }
   /// The first touch (1-based) from which the object stays recognized; empty when it is not at
   /// the last touch.
@@ -134,18 +151,104 @@ class library_experiment {
   /// (from its prior) and through that object's own filter. Throws std::invalid_argument for an
   /// object or sequence out of range.
   [[nodiscard]] library_sequence_result run(std::size_t object, std::size_t sequence) {
+    check_object(object);
+    // The touched object's simulation (frames, truth, odometry) and its own filter's run.
+    sequence_result single = experiments_[object]->run(sequence, true);
+    library_sequence_result out = start(object, sequence, single);
+    replay(*filter_, single, config_.preprocessing, out,
+           [](Eigen::Index k) { return static_cast<std::size_t>(k); });
+    return out;
+  }
+
+  /// Open set: the same sequence through a library of every object but the touched one (its
+  /// photograph left out), so that every "localized" is a false claim and `probability_unknown`
+  /// should rise. Each left-out library is prepared on first use.
+  [[nodiscard]] library_sequence_result run_left_out(std::size_t object, std::size_t sequence) {
+    check_object(object);
+    if (objects_.size() < 2)
+      detail::fail("library_experiment::run_left_out: a library of ", objects_.size(),
+                   " object; expected two or more (one is left out)");
+    if (left_out_.size() != objects_.size()) left_out_.resize(objects_.size());
+    if (!left_out_[object]) {
+      std::vector<library_map> maps;
+      for (std::size_t k = 0; k < objects_.size(); ++k)
+        if (k != object) maps.push_back(map_of(k));
+      // At the full library's scale: the same touches as `run` sees.
+      left_out_[object].emplace(make_library_filter(config_, maps, config_.simulator.geometry, {},
+                                                    config_.preprocessing.mm_per_px));
+      left_out_[object]->measurement_model().set_params(filter_->measurement_model().params());
+    }
+    sequence_result single = experiments_[object]->run(sequence, true);
+    library_sequence_result out = start(object, sequence, single);
+    out.open_set = true;
+    replay(*left_out_[object], single, config_.preprocessing, out, [object](Eigen::Index k) {
+      return static_cast<std::size_t>(k) + (static_cast<std::size_t>(k) >= object ? 1 : 0);
+    });
+    return out;
+  }
+
+  /// Wrong object: the sequence's touches (object `object`) through the single-map filter of
+  /// the next object's photograph ((object + 1) mod objects), as a `localizer` built for that
+  /// photograph would run them; every "localized" is a false claim. `decided` holds the map's
+  /// object, `object_probability` P(this map | ...) = 1 - P(not this object).
+  [[nodiscard]] library_sequence_result run_wrong_object(std::size_t object, std::size_t sequence) {
+    check_object(object);
+    library_sequence_result out = run_single_map(object, sequence, (object + 1) % objects_.size());
+    out.wrong_object = true;
+    return out;
+  }
+
+  /// The sequence's touches (object `object`) through the single-map filter of object
+  /// `other`'s photograph, as a `localizer` of that photograph runs them (`other` == `object`:
+  /// the object's own map, the single-object case the open set must not spoil).
+  [[nodiscard]] library_sequence_result run_single_map(std::size_t object, std::size_t sequence,
+                                                       std::size_t other) {
+    check_object(object);
+    check_object(other);
+    if (single_.size() != objects_.size()) single_.resize(objects_.size());
+    const touch_protocol& p = *objects_[other].protocol;
+    if (!single_[other]) {
+      const pixel_size window = checked_tactile_window(config_.simulator.geometry, p.mm_per_px,
+                                                       p.map_size(), "library_experiment");
+      single_[other].emplace(make_planar_filter(config_, visual_map(other), p.mm_per_px, window));
+    }
+    sequence_result single = experiments_[object]->run(sequence, true);
+    library_sequence_result out = start(object, sequence, single);
+    preprocess_params pp = config_.preprocessing;
+    pp.mm_per_px = p.mm_per_px;  // what a localizer of that photograph is configured with
+    replay(*single_[other], single, pp, out, [other](Eigen::Index) { return other; });
+    return out;
+  }
+
+ private:
+  void check_object(std::size_t object) const {
     if (object >= objects_.size())
       detail::fail("library_experiment::run: object ", object, "; expected 0 .. ",
                    objects_.size() - 1);
-    // The touched object's simulation (frames, truth, odometry) and its own filter's run.
-    sequence_result single = experiments_[object]->run(sequence, true);
-    library_localizer_filter& f = *filter_;
-    f.reset();
+  }
+  [[nodiscard]] library_map map_of(std::size_t k) const {
+    return {objects_[k].name, visual_map(k), objects_[k].protocol->mm_per_px};
+  }
+  library_sequence_result start(std::size_t object, std::size_t sequence,
+                                const sequence_result& single) const {
     library_sequence_result out;
     out.object = object;
     out.sequence = sequence;
     out.raised_dark = raised_dark(object);
     out.known_object = single.touches;
+    return out;
+  }
+
+  // The touches of `single` through `f` (from its prior), as `library_localizer` runs them:
+  // predict, update, restart on the two documented causes, assess, and the open-set hypothesis
+  // beside it (filter/open_set.hpp). `object_of` maps the filter's objects to the library's.
+  template <class Filter, class ObjectOf>
+  void replay(Filter& f, const sequence_result& single, const preprocess_params& pp,
+              library_sequence_result& out, ObjectOf&& object_of) const {
+    constexpr bool library = library_state_grid<typename Filter::grid_type>;
+    f.reset();
+    open_set unknown(config_.open_set);
+    const std::size_t object = out.object;
     for (std::size_t t = 0; t < single.touches.size(); ++t) {
       touch_record rec = single.touches[t];
       rec.lost_track = false;
@@ -154,29 +257,56 @@ class library_experiment {
           f.predict({.dx_mm = rec.reported_dx_mm, .dy_mm = rec.reported_dy_mm});
         } catch (const std::domain_error&) {
           f.reset();
+          unknown.reset();
           rec.lost_track = true;
         }
       }
-      const preprocessed_frame pre = preprocess(single.frames[t], config_.preprocessing);
+      const preprocessed_frame pre = preprocess(single.frames[t], pp);
       rec.accepted = pre.accepted();
       rec.rejection = pre.rejection;
       std::optional<update_report> report;
+      double log_factor = 0.0;
       if (pre.accepted()) {
-        const std::vector<image<float>> view{pre.pixels};
+        const auto z = [&] {
+          if constexpr (library)
+            return std::vector<image<float>>{pre.pixels};
+          else
+            return pre.pixels;
+        }();
         try {
-          report = f.update(view);
+          report = f.update(z);
         } catch (const std::domain_error&) {
           f.reset();
+          unknown.reset();
           rec.lost_track = true;
-          report = f.update(view);
+          report = f.update(z);
         }
         rec.log_marginal_likelihood = report->log_marginal_likelihood();
         rec.log_prediction_support = report->log_prediction_support;
         rec.contradicted = report->log_prediction_support < config_.confidence.contradiction;
+        double fraction = 1.0;
+        if constexpr (library) {
+          Eigen::Index evaluated_states = 0;
+          const auto& evaluated = f.measurement_model().evaluated();
+          for (Eigen::Index k = 0; k < f.grid().objects(); ++k)
+            if (evaluated[static_cast<std::size_t>(k)]) evaluated_states += f.grid().object_size(k);
+          fraction = static_cast<double>(evaluated_states) / static_cast<double>(f.grid().size());
+        }
+        const double before = unknown.log_odds();
+        unknown.observe(*report, fraction);
+        log_factor = before - unknown.log_odds();
       }
       const auto est = f.estimate();
       const confidence conf = assess(f, est, config_.confidence);
-      const auto decided = static_cast<std::size_t>(est.map_object);
+      std::size_t decided = object_of(0);
+      std::vector<double> p(objects_.size(), 0.0);
+      if constexpr (library) {
+        decided = object_of(est.map_object);
+        for (std::size_t k = 0; k < est.object_probability.size(); ++k)
+          p[object_of(static_cast<Eigen::Index>(k))] = est.object_probability[k];
+      } else {
+        p[decided] = 1.0;
+      }
       rec.probability_within = conf.probability_within;
       rec.verdict = conf.verdict;
       rec.estimate_x_mm = conf.centre_mm(0);
@@ -192,22 +322,29 @@ class library_experiment {
                             : inf;
       rec.entropy_nats = est.entropy_nats;
       rec.appearance_probability = est.hypothesis_probability;
+      const double pu = unknown.probability_unknown();
       out.touches.push_back(rec);
-      out.object_probability.push_back(est.object_probability);
+      out.object_probability.push_back(p);
       out.decided.push_back(decided);
-      std::size_t evaluated = 0;
-      for (const bool e : f.measurement_model().evaluated()) evaluated += e ? 1U : 0U;
+      out.probability_unknown.push_back(pu);
+      out.log_open_set_factor.push_back(log_factor);
+      out.open_set_verdict.push_back(with_open_set(conf, pu, config_.confidence).verdict);
+      std::size_t evaluated = 1;
+      if constexpr (library) {
+        evaluated = 0;
+        for (const bool e : f.measurement_model().evaluated()) evaluated += e ? 1U : 0U;
+      }
       out.evaluated_objects.push_back(report ? evaluated : 0U);
     }
-    return out;
   }
 
- private:
   std::vector<library_object> objects_;
   localization_config config_;
   std::vector<std::unique_ptr<localization_experiment>> experiments_;
   std::vector<char> dark_;
   std::optional<library_localizer_filter> filter_;
+  std::vector<std::optional<library_localizer_filter>> left_out_;  // run_left_out, per object
+  std::vector<std::optional<planar_localizer_filter>> single_;     // run_wrong_object, per map
 };
 
 }  // namespace tacmap

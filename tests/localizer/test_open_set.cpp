@@ -1,0 +1,267 @@
+// Tests of the open-set hypothesis ("none of these", filter/open_set.hpp) and of the front
+// doors that report it: P(unknown) on `library_touch_result`, P(not this object) on
+// `touch_result`, and the verdicts that must beat it.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "sim/gecko_protocol.hpp"
+#include "tacmap/filter/open_set.hpp"
+#include "tacmap/library_localizer.hpp"
+#include "tacmap/localizer.hpp"
+#include "tacmap/sim/random.hpp"
+#include "tacmap/sim/tactile_simulator.hpp"
+#include "test_support.hpp"
+
+namespace test_open_set {
+
+namespace {
+
+tacmap::localizer_config fast_config() {
+  tacmap::localizer_config c;
+  c.model = tacmap::measurement_kind::lite;
+  c.features = tacmap::window_features::shared_dense;
+  return c;
+}
+
+// A surface unlike the gecko: smooth random blobs (sums of Gaussians at random places), the
+// gecko map's size, fixed by `seed`.
+tacmap::image<float> blobs(Eigen::Index rows, Eigen::Index cols, std::uint64_t seed) {
+  tacmap::sim_rng rng(seed);
+  tacmap::image<float> out = tacmap::image<float>::Zero(rows, cols);
+  for (int b = 0; b < 60; ++b) {
+    const double cy = rng.uniform() * static_cast<double>(rows);
+    const double cx = rng.uniform() * static_cast<double>(cols);
+    const double s = 2.0 + 4.0 * rng.uniform();
+    const double a = rng.uniform() < 0.5 ? -1.0 : 1.0;
+    for (Eigen::Index y = 0; y < rows; ++y)
+      for (Eigen::Index x = 0; x < cols; ++x) {
+        const double d2 = (static_cast<double>(y) - cy) * (static_cast<double>(y) - cy) +
+                          (static_cast<double>(x) - cx) * (static_cast<double>(x) - cx);
+        out(y, x) += static_cast<float>(a * std::exp(-0.5 * d2 / (s * s)));
+      }
+  }
+  return out;
+}
+
+// The library's objects, none of which is the gecko: the gecko turned upside down and two blob
+// surfaces.
+std::vector<tacmap::library_map> library_without_gecko() {
+  const auto& p = tacmap_test::gecko();
+  return {{"turned", p.map.reverse(), p.mm_per_px},
+          {"blobs", blobs(p.map.rows(), p.map.cols(), 11), p.mm_per_px},
+          {"spots", blobs(p.map.rows(), p.map.cols(), 23), p.mm_per_px}};
+}
+
+// Runs gecko sequence `q` through `touch(frame, first)`; returns the results.
+template <class Touch>
+auto run_gecko_sequence(std::size_t q, std::uint64_t seed, Touch&& touch) {
+  const auto& p = tacmap_test::gecko();
+  tacmap::tactile_simulator sim(p.relief_mm(), p.map_size(), p.mm_per_px, {.seed = seed});
+  using result = decltype(touch(std::declval<const tacmap::tactile_frame&>(),
+                                std::optional<tacmap::odometry>{}));
+  std::vector<result> out;
+  for (std::size_t t = 0; t < p.sequences[q].size(); ++t) {
+    const auto& step = p.sequences[q][t];
+    const auto frame = sim.render(p.locations[step.location].pose());
+    out.push_back(touch(frame, t == 0 ? std::optional<tacmap::odometry>{}
+                                      : std::optional<tacmap::odometry>{step.measured_motion}));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("open_set: the prior, the touches' factors and the logistic") {
+  tacmap::open_set u({.prior_unknown = 0.2});
+  CHECK(u.probability_unknown() == doctest::Approx(0.2));
+  // A touch the maps explain e^2 times better than an unknown surface: odds 0.25 e^-2.
+  u.observe_log_factor(2.0);
+  CHECK(u.probability_unknown() ==
+        doctest::Approx(0.25 * std::exp(-2.0) / (1.0 + 0.25 * std::exp(-2.0))));
+  // The update report's support is that factor; a pruned library's population is the states
+  // evaluated (the uniform reference rises by 1 / fraction: the factor falls by log fraction).
+  u.reset();
+  tacmap::update_report report;
+  report.log_prediction_support = 1.0;
+  u.observe(report, 0.5);
+  CHECK(u.log_odds() == doctest::Approx(std::log(0.25) - 1.0 - std::log(0.5)));
+  // Extreme factors neither overflow nor give NaN.
+  u.observe_log_factor(1e6);
+  CHECK(u.probability_unknown() >= 0.0);
+  CHECK(u.probability_unknown() < 1e-300);
+  u.observe_log_factor(-std::numeric_limits<double>::infinity());
+  CHECK(u.probability_unknown() == 1.0);
+  u.reset();
+  CHECK(u.probability_unknown() == doctest::Approx(0.2));
+  // A restart of the filter restarts the question; a rejected frame (no report) changes nothing.
+  u.observe_log_factor(-3.0);
+  tacmap::detail::follow_touch(u, false, std::nullopt);
+  CHECK(u.log_odds() == doctest::Approx(std::log(0.25) + 3.0));
+  tacmap::detail::follow_touch(u, true, report);
+  CHECK(u.probability_unknown() == doctest::Approx(0.2));
+}
+
+TEST_CASE("open_set: a bad prior or factor is refused, naming the value") {
+  using tacmap_test::message_of;
+  for (const double bad : {0.0, 1.0, -0.1, 1.5, std::numeric_limits<double>::quiet_NaN(),
+                           std::numeric_limits<double>::infinity()}) {
+    CAPTURE(bad);
+    const auto m = message_of([&] { tacmap::open_set u({.prior_unknown = bad}); });
+    CHECK(m.find("prior_unknown") != std::string::npos);
+    CHECK(m.find("expected a probability in (0, 1)") != std::string::npos);
+    // The front doors check it with the rest of their configuration, before preparing a map.
+    auto c = fast_config();
+    c.open_set.prior_unknown = bad;
+    CHECK(message_of([&] { c.validate(); }).find("prior_unknown") != std::string::npos);
+    const auto& p = tacmap_test::gecko();
+    CHECK(message_of([&] { tacmap::localizer loc(p.map, p.mm_per_px, c); }).find("prior_unknown") !=
+          std::string::npos);
+    CHECK(message_of([&] {
+            tacmap::library_localizer loc(library_without_gecko(), c);
+          }).find("prior_unknown") != std::string::npos);
+  }
+  tacmap::open_set u;
+  CHECK(message_of([&] {
+          u.observe_log_factor(std::numeric_limits<double>::quiet_NaN());
+        }).find("nan") != std::string::npos);
+  CHECK(message_of([&] {
+          u.observe(tacmap::update_report{}, 0.0);
+        }).find("evaluated_fraction = 0") != std::string::npos);
+  CHECK(u.probability_unknown() == doctest::Approx(0.5));  // unchanged by the refused calls
+}
+
+TEST_CASE("with_open_set: localized only when the map and the position beat the unknown") {
+  const tacmap::confidence_params params;  // threshold 0.9
+  tacmap::confidence c;
+  c.probability_within = 0.99;
+  c.verdict = tacmap::verdict::localized;
+  const auto kept = tacmap::with_open_set(c, 0.05, params);
+  CHECK(kept.verdict == tacmap::verdict::localized);
+  CHECK(kept.probability_within == doctest::Approx(0.99 * 0.95));
+  CHECK(tacmap::with_open_set(c, 0.2, params).verdict == tacmap::verdict::uncertain);
+  c.verdict = tacmap::verdict::contradicted;
+  CHECK(tacmap::with_open_set(c, 0.0, params).verdict == tacmap::verdict::contradicted);
+}
+
+TEST_CASE(
+    "library_localizer: P(unknown) rises on an object not in the library, falls on one in it") {
+  const auto& p = tacmap_test::gecko();
+  const auto config = fast_config();
+  for (std::size_t q = 0; q < 3; ++q) {
+    CAPTURE(q);
+    // The gecko is not in the library: every "localized" would be false.
+    tacmap::library_localizer without(library_without_gecko(), config);
+    const auto unknown = run_gecko_sequence(q, 40 + q, [&](const auto& frame, const auto& moved) {
+      return moved ? without.touch(frame, *moved) : without.touch(frame);
+    });
+    // With the gecko in the library.
+    auto maps = library_without_gecko();
+    maps.push_back({"gecko", p.map, p.mm_per_px});
+    tacmap::library_localizer with(maps, config);
+    const auto known = run_gecko_sequence(q, 40 + q, [&](const auto& frame, const auto& moved) {
+      return moved ? with.touch(frame, *moved) : with.touch(frame);
+    });
+    for (const auto* run : {&unknown, &known}) {
+      for (const auto& r : *run) {
+        double sum = r.probability_unknown;
+        for (const double k : r.object_probability) sum += k;
+        CHECK(sum == doctest::Approx(1.0).epsilon(1e-5));
+        CHECK(r.probability_within <= 1.0 - r.probability_unknown + 1e-9);
+        // Never "localized" while P(unknown) leaves the threshold out of reach.
+        if (r.probability_unknown > 1.0 - config.confidence.threshold)
+          CHECK(r.verdict != tacmap::verdict::localized);
+      }
+      // The first touch has a uniform prediction: no evidence either way.
+      CHECK(run->front().probability_unknown == doctest::Approx(0.5).epsilon(1e-6));
+    }
+    for (const auto& r : unknown) CHECK(r.verdict != tacmap::verdict::localized);
+    CHECK(unknown.back().probability_unknown > 0.9);
+    CHECK(without.probability_unknown() == unknown.back().probability_unknown);
+    CHECK(known.back().probability_unknown < 0.01);
+    CHECK(known.back().object_name == "gecko");
+    CHECK(known.back().verdict == tacmap::verdict::localized);
+    // reset() goes back to the prior.
+    with.reset();
+    CHECK(with.probability_unknown() == doctest::Approx(0.5));
+  }
+}
+
+TEST_CASE("localizer: P(not this object) rises on touches of another object, falls on its own") {
+  const auto& p = tacmap_test::gecko();
+  const auto config = fast_config();
+  const auto other = blobs(p.map.rows(), p.map.cols(), 11);
+  for (std::size_t q = 0; q < 3; ++q) {
+    CAPTURE(q);
+    // The gecko's touches on the photograph of another object (the wrong-object case).
+    tacmap::localizer wrong(other, p.mm_per_px, config);
+    const auto on_other = run_gecko_sequence(q, 70 + q, [&](const auto& frame, const auto& moved) {
+      return moved ? wrong.touch(frame, *moved) : wrong.touch(frame);
+    });
+    tacmap::localizer right(p.map, p.mm_per_px, config);
+    const auto on_own = run_gecko_sequence(q, 70 + q, [&](const auto& frame, const auto& moved) {
+      return moved ? right.touch(frame, *moved) : right.touch(frame);
+    });
+    for (const auto& r : on_other) CHECK(r.verdict != tacmap::verdict::localized);
+    CHECK(on_other.front().probability_other_object == doctest::Approx(0.5).epsilon(1e-6));
+    CHECK(on_other.back().probability_other_object > 0.9);
+    CHECK(on_own.back().probability_other_object < 0.01);
+    CHECK(on_own.back().verdict == tacmap::verdict::localized);
+    for (const auto& r : on_own)
+      if (r.probability_other_object > 1.0 - config.confidence.threshold)
+        CHECK(r.verdict != tacmap::verdict::localized);
+  }
+}
+
+TEST_CASE("the verdict refuses what the closed set claims while P(unknown) is high") {
+  // The same touches on the gecko's own map and on a library holding it: nearly closed (prior
+  // 1e-9) the front doors claim "localized"; with a prior of 1 - 1e-6 the touches' evidence
+  // leaves P(unknown) high for several touches, and every one of those claims is withdrawn.
+  const auto& p = tacmap_test::gecko();
+  auto closed = fast_config(), wary = fast_config();
+  closed.open_set.prior_unknown = 1e-9;
+  wary.open_set.prior_unknown = 1.0 - 1e-6;
+  auto maps = library_without_gecko();
+  maps.push_back({"gecko", p.map, p.mm_per_px});
+  std::size_t withdrawn = 0;
+  for (std::size_t q = 0; q < 3; ++q) {
+    CAPTURE(q);
+    tacmap::localizer a(p.map, p.mm_per_px, closed), b(p.map, p.mm_per_px, wary);
+    tacmap::library_localizer la(maps, closed), lb(maps, wary);
+    const auto touch = [](auto& loc) {
+      return [&loc](const auto& frame, const auto& moved) {
+        return moved ? loc.touch(frame, *moved) : loc.touch(frame);
+      };
+    };
+    const auto ra = run_gecko_sequence(q, 90 + q, touch(a));
+    const auto rb = run_gecko_sequence(q, 90 + q, touch(b));
+    const auto rla = run_gecko_sequence(q, 90 + q, touch(la));
+    const auto rlb = run_gecko_sequence(q, 90 + q, touch(lb));
+    for (std::size_t t = 0; t < ra.size(); ++t) {
+      CAPTURE(t);
+      // The filter is the same: only the verdict and the reported probabilities differ.
+      CHECK(ra[t].position_mm == rb[t].position_mm);
+      CHECK(ra[t].probability_within == rb[t].probability_within);
+      CHECK(rla[t].position_mm == rlb[t].position_mm);
+      CHECK(rla[t].object_probability[3] / (1.0 - rla[t].probability_unknown) ==
+            doctest::Approx(rlb[t].object_probability[3] / (1.0 - rlb[t].probability_unknown)));
+      CHECK(rb[t].probability_other_object > ra[t].probability_other_object);
+      if (rb[t].probability_other_object > 0.1) {
+        CHECK(rb[t].verdict != tacmap::verdict::localized);
+        if (ra[t].verdict == tacmap::verdict::localized) ++withdrawn;
+      }
+      if (rlb[t].probability_unknown > 0.1) {
+        CHECK(rlb[t].verdict != tacmap::verdict::localized);
+        if (rla[t].verdict == tacmap::verdict::localized) ++withdrawn;
+      }
+    }
+    // Enough touches on the right object outweigh even that prior.
+    CHECK(rb.back().probability_other_object < 0.5);
+  }
+  CHECK(withdrawn > 0);
+}
+
+}  // namespace test_open_set
