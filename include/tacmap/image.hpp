@@ -102,16 +102,18 @@ inline image<float> resize_bilinear(const image<float>& src, Eigen::Index rows, 
 /// straddles); `rescale` interpolates instead. Throws std::invalid_argument for an empty source or
 /// a size that is not positive.
 [[nodiscard]] inline image<float> resize_area(const image<float>& src, Eigen::Index rows,
-                                              Eigen::Index cols) {
-  if (src.size() == 0)
-    detail::fail("resize_area: the source image is ", src.rows(), " x ", src.cols(),
-                 " px (rows x cols); expected a non-empty image");
-  if (rows < 1 || cols < 1)
-    detail::fail("resize_area: the requested size is ", rows, " x ", cols,
-                 " px (rows x cols); expected both >= 1");
-  const double sy = static_cast<double>(src.rows()) / static_cast<double>(rows);
-  const double sx = static_cast<double>(src.cols()) / static_cast<double>(cols);
-  // Per axis, the source indices each output index covers and their weights (overlap / extent):
+                                              Eigen::Index cols);
+
+namespace detail {
+/// `resize_area` with the source pixels per output pixel given (`sy` along rows, `sx` along
+/// columns; each >= 1 when shrinking): output pixel (r, c) is the mean of the source area
+/// [r sy, (r + 1) sy) x [c sx, (c + 1) sx). With rows x sy < src.rows() the source's last
+/// rows are left out (a crop), and so for columns. The working resolution's resampling
+/// (localizer.hpp): one exact scale on both axes.
+[[nodiscard]] inline image<float> resize_area_by(
+    const image<float>& src, Eigen::Index rows, Eigen::Index cols, double sy,
+    double sx) {  // Per axis, the source indices each output index covers and their weights
+                  // (overlap / extent):
   // separable, so the 2-D weight is the product and the per-pixel loop stays small.
   const auto weights = [](Eigen::Index n_out, double scale, Eigen::Index n_src) {
     std::vector<std::vector<std::pair<Eigen::Index, double>>> w(static_cast<std::size_t>(n_out));
@@ -143,6 +145,20 @@ inline image<float> resize_bilinear(const image<float>& src, Eigen::Index rows, 
       out(r, c) = static_cast<float>(sum / total);
     }
   return out;
+}
+}  // namespace detail
+
+[[nodiscard]] inline image<float> resize_area(const image<float>& src, Eigen::Index rows,
+                                              Eigen::Index cols) {
+  if (src.size() == 0)
+    detail::fail("resize_area: the source image is ", src.rows(), " x ", src.cols(),
+                 " px (rows x cols); expected a non-empty image");
+  if (rows < 1 || cols < 1)
+    detail::fail("resize_area: the requested size is ", rows, " x ", cols,
+                 " px (rows x cols); expected both >= 1");
+  return detail::resize_area_by(src, rows, cols,
+                                static_cast<double>(src.rows()) / static_cast<double>(rows),
+                                static_cast<double>(src.cols()) / static_cast<double>(cols));
 }
 
 /// `src`, sampled at `from_mm_per_px`, resampled to `to_mm_per_px` so that it covers the same

@@ -30,6 +30,7 @@
 #include <utility>
 #include <vector>
 
+#include "tacmap/executor/concept.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/filter/confidence.hpp"
 #include "tacmap/filter/open_set.hpp"
@@ -114,6 +115,41 @@ inline void check_library(const std::vector<library_map>& maps) {
   return coarsest;
 }
 
+/// The scale a library of `maps` works at for `config` and `sensor` when none is given: the
+/// coarsest map's or the working resolution (`localizer_config::working_mm_per_px`), whichever
+/// is coarser, so that photographs finer than the sensor resolves are matched at the working
+/// resolution; `wanted` when given. Throws std::invalid_argument as `library_scale`, and for a
+/// map so coarse that the sensor covers fewer than `localizer_config::min_px_per_taxel` px per
+/// taxel (naming the map, its scale and the minimum).
+[[nodiscard]] inline double library_scale(const std::vector<library_map>& maps,
+                                          const localizer_config& config,
+                                          const taxel_geometry& sensor,
+                                          std::optional<double> wanted = {}) {
+  const double coarsest = library_scale(maps, wanted);
+  for (const library_map& m : maps)
+    (void)detail::choose_working_resolution(config, sensor, m.mm_per_px,
+                                            std::max(m.map.rows(), m.map.cols()),
+                                            "library: '" + m.name + "'");
+  if (wanted) return coarsest;
+  return std::max(coarsest, config.working_scale(sensor));
+}
+
+namespace detail {
+/// What `choose_working_resolution` warns of for each map of a library matched at `scale`.
+inline std::vector<std::string> library_warnings(const std::vector<library_map>& maps,
+                                                 const localizer_config& config,
+                                                 const taxel_geometry& sensor) {
+  std::vector<std::string> out;
+  for (const library_map& m : maps) {
+    const auto r =
+        choose_working_resolution(config, sensor, m.mm_per_px, std::max(m.map.rows(), m.map.cols()),
+                                  "library: '" + m.name + "'");
+    out.insert(out.end(), r.warnings.begin(), r.warnings.end());
+  }
+  return out;
+}
+}  // namespace detail
+
 /// The filter over a library that `library_localizer` runs: each map resampled to the library's
 /// scale `library_scale(maps, mm_per_px)`, and for each the planar filter `make_planar_filter`
 /// would build, as one block of a `library_grid`. `prior`: each object's prior probability
@@ -122,40 +158,52 @@ inline void check_library(const std::vector<library_map>& maps) {
 /// at the library's scale, a scale at which the model cannot describe the sensor's window,
 /// repeated names, a prior that does not sum to one, or an invalid configuration.
 /// `measurement`: the policy whose planar model each map gets (localizer.hpp).
+/// `executor`: where one is given, the maps are prepared in parallel on it, one map a chunk
+/// (the same models as prepared one after the other: each map's preparation is unchanged).
 template <localizer_measurement M>
-[[nodiscard]] library_filter_for<M> make_library_filter(const M& measurement,
-                                                        const localizer_config& config,
-                                                        const std::vector<library_map>& maps,
-                                                        const taxel_geometry& sensor = {},
-                                                        std::vector<double> prior = {},
-                                                        std::optional<double> mm_per_px = {}) {
+[[nodiscard]] library_filter_for<M> make_library_filter(
+    const M& measurement, const localizer_config& config, const std::vector<library_map>& maps,
+    const taxel_geometry& sensor = {}, std::vector<double> prior = {},
+    std::optional<double> mm_per_px = {}, executor_ref executor = {}) {
   config.validate();
   if (config.headings != 0)
     detail::fail("make_library_filter: headings = ", config.headings,
                  "; a library is localized with a known heading (headings = 0) for now — "
                  "build a library_grid of pose grids yourself for unknown headings");
-  const double scale = library_scale(maps, mm_per_px);
+  const double scale = library_scale(maps, config, sensor, mm_per_px);
   const auto appearances = config.appearances();
   std::vector<latent_grid<planar_grid<float>>> grids;
-  std::vector<appearance_likelihood<typename M::planar_model>> models;
+  std::vector<image<float>> resampled;
+  std::vector<pixel_size> windows;
   std::vector<std::string> names;
   for (const library_map& m : maps) {
     const std::string who = "library: '" + m.name + "' at the library's scale";
-    const image<float> map = rescale(m.map, m.mm_per_px, scale);
-    const pixel_size window =
-        checked_tactile_window(sensor, scale, {map.cols(), map.rows()}, who.c_str());
+    resampled.push_back(rescale(m.map, m.mm_per_px, scale));
+    const image<float>& map = resampled.back();
+    windows.push_back(checked_tactile_window(sensor, scale, {map.cols(), map.rows()}, who.c_str()));
     grids.emplace_back(
-        planar_grid<float>({.width = map.cols(), .height = map.rows()}, scale, window),
+        planar_grid<float>({.width = map.cols(), .height = map.rows()}, scale, windows.back()),
         appearance_names(appearances));
-    try {
-      models.emplace_back(measurement.planar(config, map, window), appearances);
-    } catch (const std::invalid_argument& e) {
-      detail::fail(who, " (", scale, " mm per px, the sensor's window ", window.width, " x ",
-                   window.height, " px): ", e.what(),
-                   " — give the library a finer scale (make_library_filter's mm_per_px)");
-    }
     names.push_back(m.name);
   }
+  // The expensive part, each map's measurement model, one map a chunk.
+  using model_type = appearance_likelihood<typename M::planar_model>;
+  std::vector<std::optional<model_type>> prepared(maps.size());
+  executor.parallel_for(maps.size(), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      try {
+        prepared[k].emplace(measurement.planar(config, resampled[k], windows[k]), appearances);
+      } catch (const std::invalid_argument& e) {
+        detail::fail("library: '", maps[k].name, "' at the library's scale (", scale,
+                     " mm per px, the sensor's window ", windows[k].width, " x ", windows[k].height,
+                     " px): ", e.what(),
+                     " — give the library a finer scale (make_library_filter's mm_per_px)");
+      }
+    }
+  });
+  std::vector<model_type> models;
+  models.reserve(maps.size());
+  for (auto& m : prepared) models.push_back(std::move(*m));
   return library_filter_for<M>(
       library_grid<latent_grid<planar_grid<float>>>(std::move(grids), std::move(names),
                                                     std::move(prior)),
@@ -171,9 +219,9 @@ template <localizer_measurement M>
 [[nodiscard]] inline library_localizer_filter make_library_filter(
     const localizer_config& config, const std::vector<library_map>& maps,
     const taxel_geometry& sensor = {}, std::vector<double> prior = {},
-    std::optional<double> mm_per_px = {}) {
-  return make_library_filter(configured_models{}, config, maps, sensor, std::move(prior),
-                             mm_per_px);
+    std::optional<double> mm_per_px = {}, executor_ref executor = {}) {
+  return make_library_filter(configured_models{}, config, maps, sensor, std::move(prior), mm_per_px,
+                             executor);
 }
 
 /// What one touch on a library gave.
@@ -223,19 +271,23 @@ class basic_library_localizer {
  public:
   using filter_type = library_filter_for<Measurement>;
 
-  /// `mm_per_px`: the scale the library works at (default: the coarsest map's; see the file
-  /// comment). Throws std::invalid_argument as `make_library_filter`.
+  /// `mm_per_px`: the scale the library works at (default: the coarsest map's or the working
+  /// resolution, `localizer_config::working_mm_per_px`, whichever is coarser; see the file
+  /// comment). `executor`: where one is given, the maps are prepared in parallel on it (it
+  /// need only outlive the constructor). Throws std::invalid_argument as `make_library_filter`.
   explicit basic_library_localizer(const std::vector<library_map>& maps,
                                    localizer_config config = {}, taxel_geometry sensor = {},
                                    std::vector<double> prior = {},
                                    std::optional<double> mm_per_px = {},
-                                   Measurement measurement = Measurement{})
+                                   Measurement measurement = Measurement{},
+                                   executor_ref executor = {})
       : config_(std::move(config)),
         sensor_(sensor),
         measurement_(std::move(measurement)),
         filter_(make_library_filter(measurement_, config_, maps, sensor_, std::move(prior),
-                                    mm_per_px)) {
-    config_.preprocessing.mm_per_px = library_scale(maps, mm_per_px);
+                                    mm_per_px, executor)),
+        warnings_(detail::library_warnings(maps, config_, sensor_)) {
+    config_.preprocessing.mm_per_px = library_scale(maps, config_, sensor_, mm_per_px);
   }
 
   /// The first touch of an exploration (or one without motion since the previous touch).
@@ -284,6 +336,9 @@ class basic_library_localizer {
   [[nodiscard]] const Measurement& measurement() const { return measurement_; }
   /// The scale every map was resampled to, mm per px.
   [[nodiscard]] double mm_per_px() const { return config_.preprocessing.mm_per_px; }
+  /// What the library could not do as well as it should, in words (see
+  /// `basic_localizer::warnings()`): e.g. a photograph coarser than the working resolution.
+  [[nodiscard]] const std::vector<std::string>& warnings() const { return warnings_; }
   [[nodiscard]] Eigen::Index objects() const { return filter_.grid().objects(); }
   /// Touches used and restarts from uniform since construction or `reset()`.
   [[nodiscard]] std::size_t touches() const { return touches_; }
@@ -352,6 +407,7 @@ class basic_library_localizer {
   taxel_geometry sensor_;
   Measurement measurement_;
   filter_type filter_;
+  std::vector<std::string> warnings_;
   std::size_t calls_ = 0;
   std::size_t touches_ = 0;
   std::size_t restarts_ = 0;

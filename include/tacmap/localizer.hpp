@@ -231,7 +231,32 @@ struct localizer_config {
   /// evaluates the whole grid, as before. Measured (tacmap-evaluate --tracking, realistic,
   /// kidnaps): 145 against 147 of 175 kidnaps recovered within 3 touches, the verdict's ECE
   /// unchanged; a localized touch on the paper's grid 165 -> 71 us, 36 headings 12.1 -> 1.9 ms.
+  /// Kept off by default, measured (realistic, 9 maps, seeds 1-3): without faults the same 573
+  /// of 594 sequences localized and the same ECE (within 0.1 point), but kidnaps at touch 7 of
+  /// 12 recovered within 3 touches 422 against 429 of 583, 1.2 points fewer.
   std::optional<tracking_params> tracking;
+  /// The working resolution, mm per px: the scale the map is matched at. A photograph finer
+  /// than it is resampled to it (area-averaged) before the map is prepared, so that what a
+  /// touch and a map's preparation cost is set by the object's area and the sensor's
+  /// resolution, not by the camera's pixel count; positions are reported in the photograph's
+  /// own millimetres either way (the map frame's origin is the photograph's top-left corner).
+  /// A photograph at or coarser than it is used as it is (coarser: with a warning, see
+  /// `basic_localizer::warnings()`). Empty (the default): the sensor's pitch /
+  /// `default_px_per_taxel` (3.4 / 3 mm per px for the paper's array, the scale the models'
+  /// defaults were fitted at). Set it to the photograph's own scale (or finer) to match at full
+  /// resolution. At most the pitch / `min_px_per_taxel`.
+  std::optional<double> working_mm_per_px;
+  /// Map pixels per taxel at the default working resolution: 3, measured against matching at
+  /// full resolution on held-out photographs (docs/photographs.md, "Working resolution").
+  static constexpr double default_px_per_taxel = 3.0;
+  /// The fewest map pixels per taxel a map may have: below it the touch's image has fewer
+  /// pixels than its taxels and the descriptors' patches no longer fit the sensor's window.
+  static constexpr double min_px_per_taxel = 2.0;
+  /// The working resolution for `sensor` (mm per px): `working_mm_per_px`, else the pitch /
+  /// `default_px_per_taxel`.
+  [[nodiscard]] double working_scale(const taxel_geometry& sensor) const {
+    return working_mm_per_px.value_or(sensor.pitch_mm / default_px_per_taxel);
+  }
   [[nodiscard]] double broad() const {
     return broad_probability.value_or(default_broad_probability);
   }
@@ -322,6 +347,10 @@ struct localizer_config {
     burst.validate();
     if (calibrate_sensor) calibrate_sensor->validate();
     if (tracking) tracking->validate();
+    if (working_mm_per_px && !(std::isfinite(*working_mm_per_px) && *working_mm_per_px > 0.0))
+      detail::fail("localizer_config: working_mm_per_px = ", *working_mm_per_px,
+                   "; expected the scale to match at, a finite value > 0 mm per px (empty: the "
+                   "sensor's pitch / 3)");
     {
       preprocess_params p = preprocessing;  // mm_per_px is replaced by the map's
       p.mm_per_px = 1.0;
@@ -433,6 +462,92 @@ auto touch_with_burst(std::span<const tactile_frame> burst, const burst_params& 
   auto r = std::forward<Touch>(touch_one)(combined.frame);
   r.frames_combined = combined.used;
   return r;
+}
+
+/// The scale a photograph at `photo_mm_per_px` is matched at (`localizer_config::
+/// working_mm_per_px`) and what that costs, said in words (`basic_localizer::warnings()`).
+struct working_resolution {
+  double mm_per_px = 0.0;  ///< the scale matched at
+  bool resampled = false;  ///< the photograph was resampled to it
+  std::vector<std::string> warnings;
+};
+
+/// Chooses the working resolution for a photograph at `photo_mm_per_px` and a sensor of
+/// `sensor` (messages start with `who`):
+///  * finer than the working scale W: resampled to W, W adjusted so that the photograph's
+///    longer side is a whole number of pixels (`working_map`: positions are the photograph's
+///    millimetres exactly);
+///  * at W or coarser, down to pitch / `min_px_per_taxel`: used as it is; coarser than W with
+///    a warning of the accuracy it costs;
+///  * coarser than pitch / `min_px_per_taxel`: std::invalid_argument naming the scale and the
+///    minimum. So is a `working_mm_per_px` coarser than that.
+/// `longer_side_px`: the photograph's longer side.
+inline constexpr const char* coarse_photo_cost =
+    "Measured on held-out photographs of a 180 mm object (tacmap-working-resolution): at 2.7 px "
+    "per taxel 102 of 108 sequences localized against 105 of 108 at 3; below 2.67 px per taxel "
+    "the default classic_sift model's 16 px patches no longer fit across the array's 6 taxels. "
+    "Photograph the object at a finer scale where you can";
+[[nodiscard]] inline working_resolution choose_working_resolution(const localizer_config& config,
+                                                                  const taxel_geometry& sensor,
+                                                                  double photo_mm_per_px,
+                                                                  Eigen::Index longer_side_px,
+                                                                  const std::string& who) {
+  sensor.validate();
+  const double pitch = sensor.pitch_mm;
+  const double coarsest = pitch / localizer_config::min_px_per_taxel;
+  constexpr double slack = 1e-9;  // 3.4 / 3 given as 1.1333 is the same scale
+  const double wanted = config.working_scale(sensor);
+  if (!(std::isfinite(wanted) && wanted > 0.0))
+    fail(who, ": localizer_config::working_mm_per_px = ", wanted,
+         "; expected a finite value > 0 mm per px");
+  if (wanted > coarsest * (1.0 + slack))
+    fail(who, ": localizer_config::working_mm_per_px = ", wanted, " mm per px gives the sensor's ",
+         pitch, " mm taxels ", pitch / wanted, " px each; expected at most ", coarsest,
+         " mm per px (", localizer_config::min_px_per_taxel,
+         " px per taxel), e.g. empty for the default pitch / ",
+         localizer_config::default_px_per_taxel);
+  if (photo_mm_per_px > coarsest * (1.0 + slack))
+    fail(who, ": the photograph's scale is ", photo_mm_per_px, " mm per px, so the sensor's ",
+         pitch, " mm taxels cover ", pitch / photo_mm_per_px, " px each; expected at most ",
+         coarsest, " mm per px (", localizer_config::min_px_per_taxel,
+         " px per taxel; the default working resolution is ",
+         pitch / localizer_config::default_px_per_taxel,
+         " mm per px) — photograph the object at a finer scale (closer, or more pixels)");
+  working_resolution out;
+  if (photo_mm_per_px >= wanted * (1.0 - slack)) {
+    out.mm_per_px = photo_mm_per_px;
+    if (photo_mm_per_px > wanted * (1.0 + slack)) {
+      std::ostringstream text;
+      text.precision(3);
+      text << who << ": the photograph's " << photo_mm_per_px
+           << " mm per px is coarser than the working resolution " << wanted << " mm per px ("
+           << pitch / wanted << " px per taxel); it is used as it is, at "
+           << pitch / photo_mm_per_px << " px per taxel. " << coarse_photo_cost;
+      out.warnings.push_back(text.str());
+    }
+    return out;
+  }
+  // The longer side at a whole number of working pixels: that side's scale is exact.
+  const double side_mm = static_cast<double>(longer_side_px) * photo_mm_per_px;
+  const double pixels = std::max(1.0, std::round(side_mm / wanted));
+  out.mm_per_px = side_mm / pixels;
+  out.resampled = true;
+  return out;
+}
+
+/// `map` (at `photo_mm_per_px`) resampled to `r.mm_per_px` by area (every working pixel the
+/// mean of the photograph's pixels it covers), or `map` itself. One exact scale on both axes:
+/// along the shorter side the last fraction of a working pixel is left out (a crop of less
+/// than `r.mm_per_px`), so that every position is the photograph's millimetres exactly.
+[[nodiscard]] inline image<float> working_map(image<float> map, double photo_mm_per_px,
+                                              const working_resolution& r) {
+  if (!r.resampled) return map;
+  const double per_px = r.mm_per_px / photo_mm_per_px;  // photograph px per working px
+  const auto side = [&](Eigen::Index px) {  // whole working pixels (1e-9: the exact side)
+    return std::max<Eigen::Index>(
+        1, static_cast<Eigen::Index>(std::floor(static_cast<double>(px) / per_px + 1e-9)));
+  };
+  return resize_area_by(map, side(map.rows()), side(map.cols()), per_px, per_px);
 }
 
 /// The localizers' optional self-calibrating sensor (`localizer_config::calibrate_sensor`).
@@ -1161,14 +1276,20 @@ class basic_localizer {
   using pose_filter_type = pose_filter_for<Measurement>;
   static constexpr bool has_headings = localizes_headings<Measurement>;
 
+  /// `map` is the photograph at `mm_per_px`; it is matched at the working resolution
+  /// (`localizer_config::working_mm_per_px`: resampled when finer), positions in its own mm.
   /// Throws std::invalid_argument for an empty or non-finite map, a scale that is not a finite
-  /// positive number, a map smaller than the sensor's footprint, or an invalid configuration
+  /// positive number or gives the sensor fewer than `localizer_config::min_px_per_taxel` px per
+  /// taxel, a map smaller than the sensor's footprint, or an invalid configuration
   /// (each named with what was expected); `preparation_over_budget` and `insufficient_memory`
   /// for a preparation that would take too long or too much memory.
   basic_localizer(image<float> map, double mm_per_px, localizer_config config = {},
                   taxel_geometry sensor = {}, Measurement measurement = Measurement{})
-      : map_(checked_map(std::move(map), mm_per_px)),
-        mm_per_px_(mm_per_px),
+      : photo_mm_per_px_(checked_photo(map, mm_per_px)),
+        resolution_(detail::choose_working_resolution(
+            config, sensor, mm_per_px, std::max(map.rows(), map.cols()), "localizer")),
+        map_(detail::working_map(std::move(map), mm_per_px, resolution_)),
+        mm_per_px_(resolution_.mm_per_px),
         config_(std::move(config)),
         sensor_(sensor),
         window_(
@@ -1324,8 +1445,17 @@ class basic_localizer {
       if (pose_) return pose_->grid().base().positions();
     return planar_->grid().base();
   }
+  /// The map as matched: the photograph at the working resolution (`mm_per_px()`).
   [[nodiscard]] const image<float>& map() const { return map_; }
+  /// The scale the map is matched at, mm per px (`localizer_config::working_mm_per_px`): the
+  /// scale of `map()`, `positions()` and `belief()`. Positions are millimetres either way.
   [[nodiscard]] double mm_per_px() const { return mm_per_px_; }
+  /// The photograph's own scale, as given to the constructor.
+  [[nodiscard]] double photo_mm_per_px() const { return photo_mm_per_px_; }
+  /// What the localizer could not do as well as it should, in words, from construction: e.g. a
+  /// photograph coarser than the working resolution, and what that costs in accuracy. Empty
+  /// when nothing is amiss. The library prints nothing: show them to the user.
+  [[nodiscard]] const std::vector<std::string>& warnings() const { return resolution_.warnings; }
   [[nodiscard]] const taxel_geometry& sensor() const { return sensor_; }
   /// The sensor's footprint on the map, px.
   [[nodiscard]] pixel_size window() const { return window_; }
@@ -1425,7 +1555,8 @@ class basic_localizer {
                    "source delivered an invalid sample");
   }
 
-  static image<float> checked_map(image<float> map, double mm_per_px) {
+  // The photograph's scale, after checking the photograph and the scale.
+  static double checked_photo(const image<float>& map, double mm_per_px) {
     if (map.size() == 0)
       detail::fail(
           "localizer: the map is empty; expected an image of the object (e.g. "
@@ -1435,9 +1566,11 @@ class basic_localizer {
     if (!(std::isfinite(mm_per_px) && mm_per_px > 0.0))
       detail::fail("localizer: mm_per_px = ", mm_per_px,
                    "; expected the map's scale, a finite value > 0 millimetres per pixel");
-    return map;
+    return mm_per_px;
   }
 
+  double photo_mm_per_px_;
+  detail::working_resolution resolution_;
   image<float> map_;
   double mm_per_px_;
   localizer_config config_;

@@ -127,8 +127,9 @@ class library_experiment {
           {objects_[k].name, experiments_.back()->visual_map(), objects_[k].protocol->mm_per_px});
     }
     filter_.emplace(make_library_filter(config_, maps, config_.simulator.geometry));
-    // The touches as the library sees them: at its one scale (the coarsest map's).
-    config_.preprocessing.mm_per_px = library_scale(maps);
+    // The touches as the library sees them: at its one scale (the coarsest map's, or the
+    // working resolution where that is coarser).
+    config_.preprocessing.mm_per_px = library_scale(maps, config_, config_.simulator.geometry);
   }
 
   [[nodiscard]] std::size_t objects() const { return objects_.size(); }
