@@ -15,6 +15,7 @@
 #include "tacmap/filter/next_touch.hpp"
 #include "tacmap/library_localizer.hpp"
 #include "tacmap/localizer.hpp"
+#include "tacmap/sim/experiment.hpp"
 #include "tacmap/sim/tactile_simulator.hpp"
 
 namespace test_next_touch {
@@ -46,6 +47,8 @@ tacmap::image<float> half_textured(Eigen::Index rows, Eigen::Index cols, Eigen::
 
 tacmap::localizer_config classic_config() { return {}; }  // the default model (classic_sift)
 
+tacmap::next_touch_params entropy() { return {.objective = tacmap::next_touch_objective::entropy}; }
+
 // The planar grid and model a localizer builds for `map` with the default sensor.
 struct planar_setup {
   tacmap::pixel_size window;
@@ -58,7 +61,7 @@ struct planar_setup {
         model(c, map, window) {}
   tacmap::next_touch_ranking rank(const tacmap::detail::touch_hypotheses& h,
                                   const std::vector<tacmap::odometry>& moves,
-                                  tacmap::next_touch_params p = {}) const {
+                                  tacmap::next_touch_params p = entropy()) const {
     return tacmap::detail::rank_touches(
         h, std::span<const tacmap::odometry>(moves),
         [&](Eigen::Index) -> const tacmap::planar_grid<float>& { return grid; },
@@ -126,8 +129,7 @@ TEST_CASE("next_touch: a move onto the distinctive half ranks above a move withi
   CHECK(n.rank(h, moves).order.front() == 1);
 }
 
-TEST_CASE(
-    "next_touch: hypotheses that would land off the map count as a touch that tells nothing") {
+TEST_CASE("next_touch: hypotheses a move carries off the map are left out, or tell nothing") {
   const auto map = half_textured(90, 200, 100, 7);
   const planar_setup s(map);
   // Six hypotheses on the texture; moving 30 px to the right keeps them all on the map, moving
@@ -137,13 +139,19 @@ TEST_CASE(
     for (const Eigen::Index r : {5, 20, 35}) cells.push_back({r, c});
   const auto h = at_cells(cells);
   const std::vector<tacmap::odometry> moves{{.dx_mm = -40.0 * scale}, {.dx_mm = 3.0 * scale}};
+  // Given that the touch lands (the default): the three that land, at most log 3 to decide.
   const auto r = s.rank(h, moves);
   CHECK(r.on_map[0] == doctest::Approx(0.5));
   CHECK(r.on_map[1] == doctest::Approx(1.0));
-  // Half the mass lands: at most half of the prior entropy of the landed ones (log 3).
-  CHECK(r.score[0] <= 0.5 * std::log(3.0) + 1e-6);
+  CHECK(r.score[0] <= std::log(3.0) + 1e-6);
+  CHECK(r.score[0] > 0.9 * std::log(3.0));
   CHECK(r.score[1] > 0.9 * std::log(6.0));
   CHECK(r.order.front() == 1);
+  // Weighed by landing: half the mass lands, half of that.
+  const auto w = s.rank(
+      h, moves, {.objective = tacmap::next_touch_objective::entropy, .weigh_by_landing = true});
+  CHECK(w.score[0] == doctest::Approx(0.5 * r.score[0]));
+  CHECK(w.score[1] == doctest::Approx(r.score[1]));
 }
 
 TEST_CASE(
@@ -197,8 +205,11 @@ TEST_CASE("localizer::next_touch ranks without changing the belief, and refuses 
   const auto& seq = p.sequences[0];
   (void)loc.touch(sim.render(p.locations[seq[0].location].pose()));
   const tacmap::image<float> before = loc.belief();
-  const auto r = loc.next_touch(tacmap::touch_region{
-      .x_min_mm = -20.0, .x_max_mm = 20.0, .y_min_mm = -20.0, .y_max_mm = 20.0, .step_mm = 4.0});
+  // The entropy: after this touch the verdict's objective already finds every move as sure.
+  const auto r = loc.next_touch(
+      tacmap::touch_region{
+          .x_min_mm = -20.0, .x_max_mm = 20.0, .y_min_mm = -20.0, .y_max_mm = 20.0, .step_mm = 4.0},
+      entropy());
   CHECK(r.candidates.size() == 121);
   CHECK(r.score.size() == 121);
   CHECK(r.order.size() == 121);
@@ -227,6 +238,9 @@ TEST_CASE("localizer::next_touch ranks without changing the belief, and refuses 
   CHECK_THROWS_WITH_AS(
       (void)loc.next_touch(std::span<const tacmap::odometry>(far).first(1), {.hypotheses = 0}),
       doctest::Contains("hypotheses = 0"), std::invalid_argument);
+  CHECK_THROWS_WITH_AS((void)loc.next_touch(std::span<const tacmap::odometry>(far).first(1),
+                                            {.likelihood_scale = 1.5}),
+                       doctest::Contains("likelihood_scale = 1.5"), std::invalid_argument);
   CHECK((loc.belief() == before).all());
 }
 
@@ -235,7 +249,7 @@ TEST_CASE("localizer::next_touch: a concentrated belief leaves little for any mo
   tacmap::localizer loc(p.map, p.mm_per_px);
   const tacmap::touch_region region{
       .x_min_mm = -15.0, .x_max_mm = 15.0, .y_min_mm = -15.0, .y_max_mm = 15.0, .step_mm = 5.0};
-  const auto fresh = loc.next_touch(region);
+  const auto fresh = loc.next_touch(region, entropy());
   auto sim = tacmap::tactile_simulator(p.relief_mm(), p.map_size(), p.mm_per_px, {.seed = 5});
   const auto& seq = p.sequences[1];
   tacmap::touch_result t;
@@ -244,7 +258,7 @@ TEST_CASE("localizer::next_touch: a concentrated belief leaves little for any mo
     t = k == 0 ? loc.touch(frame) : loc.touch(frame, seq[k].measured_motion);
   }
   REQUIRE(t.verdict == tacmap::verdict::localized);
-  const auto settled = loc.next_touch(region);
+  const auto settled = loc.next_touch(region, entropy());
   const auto best = [](const tacmap::next_touch_ranking& r) { return r.score[r.best()]; };
   const auto worst = [](const tacmap::next_touch_ranking& r) { return r.score[r.order.back()]; };
   CAPTURE(best(fresh));
@@ -283,7 +297,7 @@ TEST_CASE("next_touch over a library: a move to where the objects differ ranks f
       [&](Eigen::Index o) -> const tacmap::configured_measurement& {
         return o == 0 ? sa.model : sb.model;
       },
-      5.0, {});
+      5.0, entropy());
   CHECK(r.score[0] < 0.01);
   CHECK(r.score[1] > 0.9 * std::log(2.0));
   CHECK(r.order.front() == 1);
@@ -298,6 +312,42 @@ TEST_CASE("next_touch over a library: a move to where the objects differ ranks f
   CHECK_THROWS_WITH_AS((void)lib.next_touch(std::span<const tacmap::odometry>(far)),
                        doctest::Contains("candidate 0 moves (500, 0) mm, off the map"),
                        std::invalid_argument);
+}
+
+TEST_CASE("the active touch order: chosen touches, reproducible, refused with faults") {
+  const auto& p = gecko();
+  tacmap::localization_config c;
+  c.order = tacmap::touch_order::active;
+  c.active_candidates = 8;
+  tacmap::localization_experiment active(p, c);
+  const auto a = active.run(2);
+  const auto b = active.run(2);
+  tacmap::localization_config r = c;
+  r.order = tacmap::touch_order::protocol;
+  tacmap::localization_experiment random(p, r);
+  const auto q = random.run(2);
+  REQUIRE(a.touches.size() == p.sequences[2].size());
+  // The first touch is the protocol's; the others are chosen, the same each run.
+  CHECK(a.touches[0].true_x_mm == q.touches[0].true_x_mm);
+  CHECK(a.touches[0].true_y_mm == q.touches[0].true_y_mm);
+  std::size_t elsewhere = 0;
+  for (std::size_t k = 0; k < a.touches.size(); ++k) {
+    CHECK(a.touches[k].true_x_mm == b.touches[k].true_x_mm);
+    CHECK(a.touches[k].true_y_mm == b.touches[k].true_y_mm);
+    CHECK(a.touches[k].error_mm == b.touches[k].error_mm);
+    if (a.touches[k].true_x_mm != q.touches[k].true_x_mm) ++elsewhere;
+  }
+  CHECK(elsewhere >= a.touches.size() - 2);
+
+  tacmap::localization_config faulty = c;
+  faulty.faults.outlier_probability = 0.1;
+  CHECK_THROWS_WITH_AS(tacmap::localization_experiment(p, faulty),
+                       doctest::Contains("order = active chooses where the sensor goes"),
+                       std::invalid_argument);
+  tacmap::localization_config none = c;
+  none.active_candidates = 0;
+  CHECK_THROWS_WITH_AS(tacmap::localization_experiment(p, none),
+                       doctest::Contains("active_candidates = 0"), std::invalid_argument);
 }
 
 }  // namespace test_next_touch

@@ -52,6 +52,7 @@
 #include <numeric>
 #include <span>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "tacmap/grid/planar_grid.hpp"
