@@ -29,6 +29,11 @@
 // --partial-presses, --drift, --saturation, --hysteresis; --foam-sigma is the pad's spread), and
 // the tables are preceded by a line naming every condition in effect.
 //
+// --touch-order random,active runs each configuration twice: in the protocol's random orders,
+// and with every touch after the first chosen by localizer::next_touch among random positions
+// on the map (sim/experiment.hpp, touch_order::active); a third table counts the sequences
+// localized by touch 2, 3, 4 and 6.
+//
 //   tacmap-evaluate --photo camera.png --model sift_lite,ncc --output eval.csv
 //   tacmap-evaluate --scenario realistic --model ncc --tau 0.05,0.1,0.2
 #include <unistd.h>  // isatty
