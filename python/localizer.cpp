@@ -533,19 +533,21 @@ void bind_localizer(py::module_& m) {
             next_touch_params params{.hypotheses = hypotheses};
             if (objective == "verdict")
               params.objective = next_touch_objective::verdict;
-            else if (objective != "entropy")
+            else if (objective == "entropy")
+              params.objective = next_touch_objective::entropy;
+            else
               throw py::value_error("Localizer.next_touch: objective = '" + objective +
                                     "'; expected 'entropy' or 'verdict'");
             return locked(self, [&](localizer& loc) {
               return loc.next_touch(std::span<const odometry>(moves), params);
             });
           },
-          py::arg("candidates"), py::arg("hypotheses") = 64, py::arg("objective") = "entropy",
+          py::arg("candidates"), py::arg("hypotheses") = 64, py::arg("objective") = "verdict",
           "Ranks candidate moves (map frame, mm, from where the sensor is now) by what the "
           "touch after each is expected to decide; returns a NextTouchRanking. The belief is "
           "unchanged. candidates: an (N, 2) array or a sequence of (dx_mm, dy_mm). "
-          "objective: 'entropy' (the expected entropy reduction, the default) or 'verdict' "
-          "(the expected probability within the verdict's radius). Raises ValueError for no "
+          "objective: 'verdict' (the expected probability within the verdict's radius, the "
+          "default) or 'entropy' (the expected entropy reduction). Raises ValueError for no "
           "candidates, a non-finite one, or one off the map from anywhere on it (naming it and "
           "the map's extent).")
       .def(

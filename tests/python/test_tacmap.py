@@ -168,6 +168,10 @@ class TestLocalizer(unittest.TestCase):
         # A list of pairs works as well; the verdict's objective scores probabilities.
         v = loc.next_touch(moves.tolist(), objective="verdict", hypotheses=32)
         self.assertTrue(np.all((v.score >= 0.0) & (v.score <= 1.0 + 1e-9)))
+        # The objective is the one asked for (the default is the verdict's).
+        np.testing.assert_array_equal(loc.next_touch(moves, hypotheses=32).score, v.score)
+        self.assertFalse(np.allclose(loc.next_touch(moves, hypotheses=32,
+                                                    objective="entropy").score, v.score))
         # One candidate: nothing to choose between.
         self.assertTrue(loc.next_touch([(1.0, 0.0)]).uninformative)
         with self.assertRaisesRegex(ValueError, "candidate 1 moves .* not finite"):
