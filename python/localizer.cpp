@@ -4,6 +4,7 @@
 // (bindings.hpp first: it defines TACMAP_ASSERT for the tacmap headers below.)
 
 #include <array>
+#include <cstdint>
 #include <mutex>
 #include <span>
 #include <variant>
@@ -417,6 +418,48 @@ void bind_localizer(py::module_& m) {
                ", touches=" + std::to_string(r.touches) + ")";
       });
 
+  // ---- NextTouchRanking ----
+  py::class_<next_touch_ranking>(m, "NextTouchRanking",
+                                 "Candidate moves ranked by what the touch after each is expected "
+                                 "to decide (C++ tacmap::next_touch_ranking). Read-only.")
+      .def_property_readonly(
+          "order",
+          [](const next_touch_ranking& r) {
+            return py::array_t<std::int64_t>(
+                static_cast<py::ssize_t>(r.order.size()),
+                std::vector<std::int64_t>(r.order.begin(), r.order.end()).data());
+          },
+          "Candidate indices, best first (numpy int64); equal scores keep the input order.")
+      .def_property_readonly(
+          "score",
+          [](const next_touch_ranking& r) {
+            return py::array_t<double>(static_cast<py::ssize_t>(r.score.size()), r.score.data());
+          },
+          "Each candidate's score in input order (numpy float64): the expected entropy "
+          "reduction in nats, or with objective 'verdict' the expected probability within the "
+          "verdict's radius after the touch.")
+      .def_property_readonly(
+          "on_map",
+          [](const next_touch_ranking& r) {
+            return py::array_t<double>(static_cast<py::ssize_t>(r.on_map.size()), r.on_map.data());
+          },
+          "Each candidate's probability, under the belief, that the sensor lands on the map.")
+      .def_property_readonly(
+          "best", [](const next_touch_ranking& r) { return r.best(); },
+          "The index of the best candidate (order[0]).")
+      .def_readonly("uninformative", &next_touch_ranking::uninformative,
+                    "True when every score is within the tolerance of every other: no candidate "
+                    "is expected to decide more than another (order is then the input order).")
+      .def_readonly("entropy_nats", &next_touch_ranking::entropy_nats,
+                    "The entropy of the hypotheses drawn from the belief, before the touch.")
+      .def_readonly("hypotheses", &next_touch_ranking::hypotheses,
+                    "Distinct hypotheses drawn from the belief.")
+      .def("__repr__", [](const next_touch_ranking& r) {
+        return "NextTouchRanking(best=" + std::to_string(r.best()) +
+               ", candidates=" + std::to_string(r.score.size()) +
+               ", uninformative=" + (r.uninformative ? "True" : "False") + ")";
+      });
+
   // ---- Localizer ----
   py::class_<py_localizer>(m, "Localizer", localizer_doc)
       .def(py::init([](const py::object& map, double mm_per_px,
@@ -501,6 +544,39 @@ void bind_localizer(py::module_& m) {
           "arm's x and y axes must be parallel to the map's and the yaw may not change by "
           "more than 5 degrees between touches; with unknown heading any frame will do, "
           "because only motion relative to the sensor is used.")
+      .def(
+          "next_touch",
+          [](py_localizer& self, const py::object& candidates, int hypotheses,
+             const std::string& objective) {
+            const auto a =
+                py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(candidates);
+            if (!a || a.ndim() != 2 || a.shape(1) != 2)
+              throw py::value_error(
+                  "Localizer.next_touch: candidates must be moves (dx_mm, dy_mm): an (N, 2) "
+                  "array or a sequence of pairs");
+            std::vector<odometry> moves;
+            for (py::ssize_t i = 0; i < a.shape(0); ++i)
+              moves.push_back({.dx_mm = a.at(i, 0), .dy_mm = a.at(i, 1)});
+            next_touch_params params{.hypotheses = hypotheses};
+            if (objective == "verdict")
+              params.objective = next_touch_objective::verdict;
+            else if (objective == "entropy")
+              params.objective = next_touch_objective::entropy;
+            else
+              throw py::value_error("Localizer.next_touch: objective = '" + objective +
+                                    "'; expected 'entropy' or 'verdict'");
+            return locked(self, [&](localizer& loc) {
+              return loc.next_touch(std::span<const odometry>(moves), params);
+            });
+          },
+          py::arg("candidates"), py::arg("hypotheses") = 64, py::arg("objective") = "verdict",
+          "Ranks candidate moves (map frame, mm, from where the sensor is now) by what the "
+          "touch after each is expected to decide; returns a NextTouchRanking. The belief is "
+          "unchanged. candidates: an (N, 2) array or a sequence of (dx_mm, dy_mm). "
+          "objective: 'verdict' (the expected probability within the verdict's radius, the "
+          "default) or 'entropy' (the expected entropy reduction). Raises ValueError for no "
+          "candidates, a non-finite one, or one off the map from anywhere on it (naming it and "
+          "the map's extent).")
       .def(
           "reset", [](py_localizer& self) { locked(self, [](localizer& loc) { loc.reset(); }); },
           "Starts a new exploration on the same map: a uniform belief, no previous pose.")

@@ -29,6 +29,11 @@
 // --partial-presses, --drift, --saturation, --hysteresis; --foam-sigma is the pad's spread), and
 // the tables are preceded by a line naming every condition in effect.
 //
+// --touch-order random,active runs each configuration twice: in the protocol's random orders,
+// and with every touch after the first chosen by localizer::next_touch among random positions
+// on the map (sim/experiment.hpp, touch_order::active); a third table counts the sequences
+// localized by touch 2, 3, 4 and 6.
+//
 //   tacmap-evaluate --photo camera.png --model sift_lite,ncc --output eval.csv
 //   tacmap-evaluate --scenario realistic --model ncc --tau 0.05,0.1,0.2
 #include <unistd.h>  // isatty
@@ -189,6 +194,12 @@ std::string ece_text(const std::vector<double>& p, const std::vector<char>& ok) 
   return buf;
 }
 
+// A configuration's name in the tables and the CSV: its filter's, and "/active" when its
+// touches are chosen by next_touch (--touch-order active).
+std::string config_label(const tacmap::localization_config& c) {
+  return c.name() + (c.order == tacmap::touch_order::active ? "/active" : "");
+}
+
 // Second table: per configuration, over every map — the expected calibration error (points) of
 // the belief's P(error <= 5 mm), of its heading and appearance claims, and the precision and
 // recall of its "localized" verdict (confidence_params defaults) by touch number.
@@ -200,7 +211,7 @@ void print_confidence(const std::map<std::string, confidence_tally>& tallies,
       "\"contradicted\" %%: at a fault / elsewhere |\n"
       "|---|---|---|---|---|---|---|---|\n");
   for (const auto& config : configs) {
-    const auto it = tallies.find(config.name());
+    const auto it = tallies.find(config_label(config));
     if (it == tallies.end()) continue;
     const confidence_tally& t = it->second;
     std::size_t said = 0, said_right = 0;
@@ -211,11 +222,41 @@ void print_confidence(const std::map<std::string, confidence_tally>& tallies,
       recall += (k == 0 ? "" : ", ") + percent(t.said_and_right[k], t.right[k]);
     }
     std::printf("| %s | %zu | %s | %s | %s | %s (%zu of %zu) | %s | %s / %s |\n",
-                config.name().c_str(), t.within.size(), ece_text(t.within, t.within_ok).c_str(),
-                ece_text(t.heading, t.heading_ok).c_str(),
+                config_label(config).c_str(), t.within.size(),
+                ece_text(t.within, t.within_ok).c_str(), ece_text(t.heading, t.heading_ok).c_str(),
                 ece_text(t.appearance, t.appearance_ok).c_str(), percent(said_right, said).c_str(),
                 said_right, said, recall.c_str(), percent(t.faulted_flagged, t.faulted).c_str(),
                 percent(t.clean_flagged, t.clean).c_str());
+  }
+}
+
+// Third table: per configuration, over every map — sequences localized (error below 5 mm from
+// touch k on, as `tacmap::localized`) by touch 2, 3, 4 and 6: what choosing the touches
+// (--touch-order active) is for.
+struct early_tally {
+  static constexpr std::size_t touches[] = {2, 3, 4, 6};
+  std::size_t sequences = 0;
+  std::size_t by[std::size(touches)] = {};
+  void add(const std::vector<tacmap::touch_record>& run) {
+    ++sequences;
+    for (std::size_t k = 0; k < std::size(touches); ++k)
+      by[k] += tacmap::localized(run, 5.0, touches[k]) ? 1U : 0U;
+  }
+};
+
+void print_by_touch(const std::map<std::string, early_tally>& tallies,
+                    const std::vector<tacmap::localization_config>& configs) {
+  std::printf(
+      "\n| configuration | touch order | sequences | localized by touch 2 | by touch 3 | by "
+      "touch 4 | by touch 6 |\n|---|---|---|---|---|---|---|\n");
+  for (const auto& config : configs) {
+    const auto it = tallies.find(config_label(config));
+    if (it == tallies.end()) continue;
+    const early_tally& t = it->second;
+    std::printf("| %s | %s | %zu |", config_label(config).c_str(), to_string(config.order),
+                t.sequences);
+    for (const std::size_t b : t.by) std::printf(" %s (%zu) |", percent(b, t.sequences).c_str(), b);
+    std::printf("\n");
   }
 }
 
@@ -497,6 +538,36 @@ int main(int argc, char** argv) try {
       "--tracking", tracking,
       "the filter tracks once localized (tacmap::default_tracking(): the likelihood only "
       "where the prediction holds its mass, the whole grid every 16 touches and on doubt)");
+  std::vector<std::string> touch_orders{"random"};
+  app.add_option("--touch-order", touch_orders,
+                 "where each touch after the first goes: random (the protocol's random orders) "
+                 "or active (chosen by localizer::next_touch among --active-candidates random "
+                 "positions on the map; known heading, no faults); a comma-separated list runs "
+                 "each")
+      ->delimiter(',');
+  std::size_t active_candidates = 32;
+  app.add_option("--active-candidates", active_candidates,
+                 "--touch-order active: candidate positions drawn per touch")
+      ->check(CLI::Range(1, 10000));
+  double active_min_move = 0.0;
+  app.add_option("--active-min-move", active_min_move,
+                 "--touch-order active: candidates at least this far from the previous touch, mm")
+      ->check(CLI::Range(0.0, 1000.0));
+  bool weigh_by_landing = false;
+  app.add_flag("--next-touch-weigh-landing", weigh_by_landing,
+               "--touch-order active: weigh each move's score by the belief's probability that "
+               "it lands on the map (next_touch_params::weigh_by_landing)");
+  double likelihood_scale = tacmap::next_touch_params{}.likelihood_scale;
+  app.add_option("--next-touch-likelihood-scale", likelihood_scale,
+                 "--touch-order active: factor on the predicted log-likelihoods, (0, 1] "
+                 "(next_touch_params::likelihood_scale)")
+      ->check(CLI::Range(1e-6, 1.0));
+  std::string next_touch_objective = "verdict";
+  app.add_option(
+      "--next-touch-objective", next_touch_objective,
+      "--touch-order active: what next_touch maximises, verdict (the expected probability "
+      "within the verdict's radius; the default) or entropy (the expected entropy "
+      "reduction)");
   app.add_flag("--random-orientation", random_orientation,
                "configurations with headings > 0: each sequence's sensor heading is drawn "
                "uniformly (known-orientation ones keep heading 0)");
@@ -812,6 +883,45 @@ int main(int argc, char** argv) try {
     configs = std::move(expanded);
   }
 
+  // One copy of every configuration per --touch-order.
+  {
+    const auto objective = parse_choice<tacmap::next_touch_objective>(
+        "--next-touch-objective", next_touch_objective,
+        {{"entropy", tacmap::next_touch_objective::entropy},
+         {"verdict", tacmap::next_touch_objective::verdict}});
+    std::vector<tacmap::localization_config> expanded;
+    for (const auto& name : touch_orders) {
+      const auto order = parse_choice<tacmap::touch_order>(
+          "--touch-order", name,
+          {{"random", tacmap::touch_order::protocol}, {"active", tacmap::touch_order::active}});
+      if (order == tacmap::touch_order::active && library)
+        throw CLI::ValidationError("--touch-order",
+                                   "active touches are run for single maps; drop --library");
+      for (auto c : configs) {
+        c.order = order;
+        c.active_candidates = active_candidates;
+        c.next_touch.objective = objective;
+        c.next_touch.weigh_by_landing = weigh_by_landing;
+        c.next_touch.likelihood_scale = likelihood_scale;
+        c.active_min_move_mm = active_min_move;
+        if (order == tacmap::touch_order::active) {
+          try {  // known heading, no faults: say which configurations cannot run it
+            c.validate();
+          } catch (const std::invalid_argument& e) {
+            std::fprintf(stderr, "tacmap-evaluate: skipping %s: %s\n", config_label(c).c_str(),
+                         e.what());
+            continue;
+          }
+        }
+        expanded.push_back(c);
+      }
+    }
+    if (expanded.empty())
+      throw CLI::ValidationError("--touch-order",
+                                 "no configuration left to run (see the skipped ones above)");
+    configs = std::move(expanded);
+  }
+
   std::vector<named_map> maps;
   if (!no_gecko) {
     if (gecko_dir.empty()) gecko_dir = default_gecko_dir(argc > 0 ? argv[0] : nullptr);
@@ -881,6 +991,7 @@ int main(int argc, char** argv) try {
   std::size_t done = 0;
   bool below_floor = false;
   std::map<std::string, confidence_tally> confidence;  // per configuration, over every map
+  std::map<std::string, early_tally> by_touch;         // likewise
   std::fprintf(stderr, "scenario: %s\n", to_string(scenario));
   std::printf("%s%s\n\n", conditions_text(to_string(scenario), sim, effects).c_str(),
               calibration_text.c_str());
@@ -894,10 +1005,12 @@ int main(int argc, char** argv) try {
     const std::size_t n = max_sequences == 0 ? m.protocol.sequences.size()
                                              : std::min(m.protocol.sequences.size(), max_sequences);
     for (const auto& config : configs) {
-      if (!quiet) progress(done, total, m.name + " " + config.name() + " (building the model)");
+      if (!quiet)
+        progress(done, total, m.name + " " + config_label(config) + " (building the model)");
       tacmap::localization_experiment experiment(m.protocol, config);  // once per map x config
       std::size_t successes = 0;
       std::vector<double> ttl, final_errors, final_entropies, right_appearance;
+      early_tally& early = by_touch[config_label(config)];
       std::size_t dark_sequences = 0, dark_successes = 0, recoveries = 0, moved = 0;
       for (std::size_t q = 0; q < n; ++q) {
         const auto run = experiment.run(q);
@@ -905,6 +1018,7 @@ int main(int argc, char** argv) try {
         const auto t = tacmap::touches_to_localize(run.touches);
         successes += ok ? 1U : 0U;
         if (ok) ttl.push_back(static_cast<double>(*t));
+        early.add(run.touches);
         final_errors.push_back(run.touches.back().error_mm);
         final_entropies.push_back(run.touches.back().entropy_nats);
         // Only sequences the slip or kidnap moved: one that could not happen (no direction
@@ -920,7 +1034,8 @@ int main(int argc, char** argv) try {
         if (const auto& p = run.touches.back().appearance_probability; p.size() == 2)
           right_appearance.push_back(p[run.raised_dark ? 1 : 0]);
         for (const auto& r : run.touches)
-          csv << m.name << ',' << config.name() << ',' << tacmap::to_string(config.model) << ','
+          csv << m.name << ',' << config_label(config) << ',' << tacmap::to_string(config.model)
+              << ','
               << (config.model == tacmap::measurement_kind::ncc ? ""
                                                                 : tacmap::to_string(config.pairs))
               << ','
@@ -947,9 +1062,9 @@ int main(int argc, char** argv) try {
               << csv_number(r.map_error_mm) << ',' << csv_number(r.log_prediction_support) << ','
               << (r.contradicted ? 1 : 0) << ',' << (r.odometry_outlier || r.moved_unseen ? 1 : 0)
               << '\n';
-        confidence[config.name()].add(run, config.headings > 0);
+        confidence[config_label(config)].add(run, config.headings > 0);
         ++done;
-        if (!quiet) progress(done, total, m.name + " " + config.name());
+        if (!quiet) progress(done, total, m.name + " " + config_label(config));
       }
       if (!quiet) std::fprintf(stderr, "\r%*s\r", 110, "");
       char ttl_text[32] = "-";
@@ -966,7 +1081,7 @@ int main(int argc, char** argv) try {
                            " not moved: no room on the map)";
       }
       std::printf("| %s | %s | %zu / %zu | %s | %.2f | %.2f | %zu / %zu | %s | %s |\n",
-                  m.name.c_str(), config.name().c_str(), successes, n, ttl_text,
+                  m.name.c_str(), config_label(config).c_str(), successes, n, ttl_text,
                   tacmap::median(final_errors), tacmap::median(final_entropies), dark_successes,
                   dark_sequences, appearance_text, recovery_text.c_str());
       std::fflush(stdout);
@@ -975,6 +1090,7 @@ int main(int argc, char** argv) try {
     }
   }
   print_confidence(confidence, configs);
+  print_by_touch(by_touch, configs);
   csv.close();
   if (!csv)
     tacmap::detail::fail<std::runtime_error>("tacmap-evaluate: writing '", output, "' failed");

@@ -330,6 +330,21 @@ class basic_library_localizer {
   /// Forgets what the self-calibration learnt; `reset()` keeps it.
   void reset_sensor_calibration() { correction_.reset(); }
 
+  /// Ranks candidate moves by what the touch after each is expected to decide about the object
+  /// and the position together (hypotheses over both; see `basic_localizer::next_touch` and
+  /// filter/next_touch.hpp). The belief is unchanged.
+  [[nodiscard]] next_touch_ranking next_touch(std::span<const odometry> candidates,
+                                              const next_touch_params& params = {}) const {
+    return detail::rank_library_touches(filter_, candidates, config_.confidence.radius_mm, params,
+                                        "library_localizer::next_touch");
+  }
+  /// The moves of a reachable rectangle (`touch_region::candidates()`), ranked.
+  [[nodiscard]] next_touch_ranking next_touch(const touch_region& region,
+                                              const next_touch_params& params = {}) const {
+    const std::vector<odometry> c = region.candidates();
+    return next_touch(std::span<const odometry>(c), params);
+  }
+
   [[nodiscard]] const filter_type& filter() const { return filter_; }
   /// The configuration, with `preprocessing.mm_per_px` set to the library's scale.
   [[nodiscard]] const localizer_config& config() const { return config_; }

@@ -35,6 +35,7 @@
 #include "tacmap/detail/type_name.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/filter/confidence.hpp"
+#include "tacmap/filter/next_touch.hpp"
 #include "tacmap/filter/open_set.hpp"
 #include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/grid/planar_grid.hpp"
@@ -741,6 +742,15 @@ class configured_measurement {
         model_);
   }
 
+  /// Next-touch hooks (filter/next_touch.hpp): the chosen model's.
+  void window_descriptors(std::span<const Eigen::Index> states, Eigen::ArrayXXf& out) const {
+    std::visit([&](const auto& m) { m.window_descriptors(states, out); }, model_);
+  }
+  void predicted_log_likelihoods(const Eigen::ArrayXXf& touched, const Eigen::ArrayXXf& at,
+                                 Eigen::ArrayXXf& out) const {
+    std::visit([&](const auto& m) { m.predicted_log_likelihoods(touched, at, out); }, model_);
+  }
+
  private:
   using variant_type = std::variant<ncc_likelihood<float>, descriptor_likelihood<sift_lite>,
                                     descriptor_likelihood<classic_sift>,
@@ -1409,6 +1419,27 @@ class basic_localizer {
   }
   /// Forgets what the self-calibration learnt (a new or repaired sensor); `reset()` keeps it.
   void reset_sensor_calibration() { correction_.reset(); }
+
+  /// Ranks candidate moves (map frame, mm, from where the sensor is now) by what the touch after
+  /// each is expected to decide (filter/next_touch.hpp): scores in input order, the order best
+  /// first (ties keep the input order), `uninformative` when none is expected to decide more
+  /// than another. The belief is unchanged. Throws std::invalid_argument for no candidates, a
+  /// non-finite one or one off the map from anywhere on it (naming it and the map's extent), and
+  /// for an unknown heading (`headings` > 0: not ranked yet).
+  [[nodiscard]] next_touch_ranking next_touch(std::span<const odometry> candidates,
+                                              const next_touch_params& params = {}) const {
+    if (!planar_)
+      detail::fail("localizer::next_touch: headings = ", config_.headings,
+                   "; ranking moves needs a known heading (headings = 0) for now");
+    return detail::rank_planar_touches(*planar_, candidates, config_.confidence.radius_mm, params,
+                                       "localizer::next_touch");
+  }
+  /// The moves of a reachable rectangle (`touch_region::candidates()`), ranked.
+  [[nodiscard]] next_touch_ranking next_touch(const touch_region& region,
+                                              const next_touch_params& params = {}) const {
+    const std::vector<odometry> c = region.candidates();
+    return next_touch(std::span<const odometry>(c), params);
+  }
 
   /// The belief over positions (summed over headings and appearances): one value per position
   /// of the sensor's centre, `positions().rows() x positions().cols()`; the position of element

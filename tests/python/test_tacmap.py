@@ -187,6 +187,45 @@ class TestLocalizer(unittest.TestCase):
             burst.touch_burst([])
         self.assertEqual(burst.touches, 2)
 
+    def test_next_touch_ranks_candidate_moves_without_changing_the_belief(self):
+        p = gecko()
+        loc = tacmap.Localizer(p.map, p.mm_per_px, fast_config())
+        sim = simulator(6)
+        loc.touch(sim.render(*p.locations[0]))
+        before = loc.belief()
+        xs, ys = np.meshgrid(np.arange(-20.0, 21.0, 10.0), np.arange(-20.0, 21.0, 10.0))
+        moves = np.stack([xs.ravel(), ys.ravel()], axis=1)
+        r = loc.next_touch(moves, objective="entropy")
+        self.assertIsInstance(r, tacmap.NextTouchRanking)
+        self.assertEqual(r.score.shape, (25,))
+        self.assertEqual(sorted(r.order.tolist()), list(range(25)))
+        self.assertEqual(r.best, r.order[0])
+        self.assertTrue(np.all(np.diff(r.score[r.order]) <= 0.0))
+        self.assertFalse(r.uninformative)
+        self.assertGreater(r.hypotheses, 1)
+        self.assertTrue(np.all((r.on_map >= 0.0) & (r.on_map <= 1.0)))
+        np.testing.assert_array_equal(loc.belief(), before)
+        # A list of pairs works as well; the verdict's objective scores probabilities.
+        v = loc.next_touch(moves.tolist(), objective="verdict", hypotheses=32)
+        self.assertTrue(np.all((v.score >= 0.0) & (v.score <= 1.0 + 1e-9)))
+        # The objective is the one asked for (the default is the verdict's).
+        np.testing.assert_array_equal(loc.next_touch(moves, hypotheses=32).score, v.score)
+        self.assertFalse(np.allclose(loc.next_touch(moves, hypotheses=32,
+                                                    objective="entropy").score, v.score))
+        # One candidate: nothing to choose between.
+        self.assertTrue(loc.next_touch([(1.0, 0.0)]).uninformative)
+        with self.assertRaisesRegex(ValueError, "candidate 1 moves .* not finite"):
+            loc.next_touch([(1.0, 0.0), (math.nan, 0.0)])
+        with self.assertRaisesRegex(ValueError, "candidate 0 moves .* off the map"):
+            loc.next_touch([(0.0, 1000.0)])
+        with self.assertRaisesRegex(ValueError, "no candidate moves"):
+            loc.next_touch(np.zeros((0, 2)))
+        with self.assertRaisesRegex(ValueError, "an \\(N, 2\\) array"):
+            loc.next_touch([1.0, 2.0, 3.0])
+        with self.assertRaisesRegex(ValueError, "objective"):
+            loc.next_touch(moves, objective="best")
+        np.testing.assert_array_equal(loc.belief(), before)
+
     def test_frames_as_frame_objects_arrays_and_strided_views_agree(self):
         p = gecko()
         sim = simulator(3)

@@ -630,6 +630,72 @@ class descriptor_likelihood {
     }
   }
 
+  /// Next-touch hook (filter/next_touch.hpp): the descriptors a noiseless touch would give at
+  /// each of `states` (grid indices), as the model holds them — per-window features: the
+  /// window's own (int8 storage decoded, the contrast basis kept: it is orthonormal, distances
+  /// do not change); shared dense: the dense field at each patch's offset. Column i is state i,
+  /// patch m in rows [m dimension(), (m + 1) dimension()).
+  void window_descriptors(std::span<const Eigen::Index> states, Eigen::ArrayXXf& out) const {
+    const Eigen::Index m_count = patches_per_window();
+    const Eigen::Index dim = field_.values.rows();
+    out.resize(dim * m_count, static_cast<Eigen::Index>(states.size()));
+    for (std::size_t i = 0; i < states.size(); ++i) {
+      const Eigen::Index q = states[i];
+      TACMAP_ASSERT(q >= 0 && q < rows_ * cols_, "window_descriptors: state out of range");
+      const auto col = static_cast<Eigen::Index>(i);
+      for (Eigen::Index m = 0; m < m_count; ++m) {
+        if (params_.features == window_features::per_window) {
+          const window_patch& f = per_window_[static_cast<std::size_t>(m)];
+          if (quantized_)
+            for (Eigen::Index k = 0; k < dim; ++k)
+              out(m * dim + k, col) =
+                  static_cast<float>(f.quantized.at(q, k)) / detail::quantization_scale;
+          else
+            for (Eigen::Index k = 0; k < dim; ++k)
+              out(m * dim + k, col) = static_cast<float>(f.values.at(q, k));
+        } else {
+          const grid_cell o = offsets_[static_cast<std::size_t>(m)];
+          out.block(m * dim, col, dim, 1) =
+              field_.at(q / cols_ + o.row, q % cols_ + o.col).template cast<float>();
+        }
+      }
+    }
+  }
+
+  /// Next-touch hook: out(a, b) = log p(z_a | b), the touch z_a a noiseless one whose
+  /// descriptors are column a of `touched`, at the window whose descriptors are column b of
+  /// `at` (both from `window_descriptors`, of this model or one of the same configuration):
+  /// eq. (1) with the model's pairing, then its shape and tempering. `either_per_patch` is
+  /// scored as `as_is` (a noiseless touch has the map's sign).
+  void predicted_log_likelihoods(const Eigen::ArrayXXf& touched, const Eigen::ArrayXXf& at,
+                                 Eigen::ArrayXXf& out) const {
+    const Eigen::Index m_count = patches_per_window();
+    const Eigen::Index dim = field_.values.rows();
+    TACMAP_ASSERT(touched.rows() == dim * m_count && at.rows() == dim * m_count,
+                  "predicted_log_likelihoods: descriptors of another model");
+    out.setZero(touched.cols(), at.cols());
+    // ||t - s|| from ||t||^2 + ||s||^2 - 2 t.s: one matrix product per patch pair.
+    const auto add_pair = [&](Eigen::Index mt, Eigen::Index ms) {
+      const auto t = touched.middleRows(mt * dim, dim).matrix();
+      const auto s = at.middleRows(ms * dim, dim).matrix();
+      Eigen::MatrixXf d2 = -2.0F * (t.transpose() * s);
+      d2.array().colwise() += t.colwise().squaredNorm().transpose().array();
+      d2.array().rowwise() += s.colwise().squaredNorm().array();
+      out += d2.array().max(0.0F).sqrt();
+    };
+    for (Eigen::Index m = 0; m < m_count; ++m) {
+      if (params_.pairs == pairing::aligned)
+        add_pair(m, m);
+      else
+        for (Eigen::Index n = 0; n < m_count; ++n) add_pair(n, m);
+    }
+    const auto temper = static_cast<float>(params_.tempering);
+    if (params_.shape == likelihood_shape::inverse)
+      out = -temper * (out + static_cast<float>(params_.epsilon)).log();
+    else
+      out *= -temper / static_cast<float>(params_.tau);
+  }
+
  private:
   // log p(z | x) of the windows in tiles `t` (per-window features, contrast as_is; g: the
   // touch's descriptors in the stored basis): as per_window_distances then to_log_likelihood, on

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cmath>
+#include <span>
 #include <stdexcept>
 
 #include "tacmap/detail/setting_ranges.hpp"
@@ -115,6 +116,31 @@ class ncc_likelihood {
   }
 
   [[nodiscard]] const ncc_params& params() const { return params_; }
+
+  /// Next-touch hook (filter/next_touch.hpp): each of `states`' window (grid index), zero-mean
+  /// and of unit norm (zero for a flat window), one column each: what a noiseless touch there
+  /// gives the correlation.
+  void window_descriptors(std::span<const Eigen::Index> states, Eigen::ArrayXXf& out) const {
+    const Eigen::Index cols = inv_norm_.cols();
+    out.resize(window_.width * window_.height, static_cast<Eigen::Index>(states.size()));
+    for (std::size_t i = 0; i < states.size(); ++i) {
+      const Eigen::Index q = states[i];
+      const auto col = static_cast<Eigen::Index>(i);
+      const image<T> w = map_.block(q / cols, q % cols, window_.height, window_.width);
+      Eigen::ArrayXf v = Eigen::Map<const Eigen::Array<T, Eigen::Dynamic, 1>>(w.data(), w.size())
+                             .template cast<float>();
+      v -= v.mean();
+      const float norm = std::sqrt(v.square().sum());
+      out.col(col) = norm > 1e-6F ? (v / norm).eval() : Eigen::ArrayXf::Zero(v.size()).eval();
+    }
+  }
+  /// Next-touch hook: out(a, b) = log p(z_a | b) = tempering ncc(a, b) / tau for the noiseless
+  /// touch of column a of `touched` at the window of column b of `at`.
+  void predicted_log_likelihoods(const Eigen::ArrayXXf& touched, const Eigen::ArrayXXf& at,
+                                 Eigen::ArrayXXf& out) const {
+    out = (touched.matrix().transpose() * at.matrix()).array() *
+          static_cast<float>(params_.tempering / params_.tau);
+  }
 
  private:
   ncc_params params_;

@@ -66,6 +66,19 @@
 
 namespace tacmap {
 
+/// Where a simulated sequence's touches go.
+enum class touch_order {
+  /// The protocol's sequence: its locations in its (random) order — the paper's way.
+  protocol,
+  /// The first touch where the protocol's is; each next one chosen by `next_touch` among
+  /// `localization_config::active_candidates` random positions on the map (filter/next_touch.hpp).
+  active,
+};
+
+[[nodiscard]] inline const char* to_string(touch_order o) {
+  return o == touch_order::protocol ? "random" : "active";
+}
+
 /// Everything that configures one simulated localization run: the filter (`localizer_config`:
 /// the localizer's own settings and defaults) and the simulated world around it.
 struct localization_config : localizer_config {
@@ -87,12 +100,38 @@ struct localization_config : localizer_config {
   /// the calibration, not localized): a sensor in use has a history, a 7-touch sequence alone
   /// is too short to estimate 84 taxels. Used only with `self_calibrate`.
   std::size_t calibration_warmup = 0;
+  /// Where the touches go (`touch_order`). Active: each sequence as long as the protocol's, the
+  /// candidates drawn uniformly over the map's positions from the sequence's own stream of the
+  /// simulator seed (reproducible whatever sequences run), the odometry the true move plus the
+  /// protocol's noise (`touch_protocol::odometry_sigma_mm`) from the same stream.
+  touch_order order = touch_order::protocol;
+  std::size_t active_candidates = 32;  ///< candidates per touch (active order)
+  /// Active order: candidates are drawn at least this far from the previous touch (mm; 0: any).
+  double active_min_move_mm = 0.0;
+  next_touch_params next_touch{};  ///< the ranking's settings (active order)
 
   /// Throws std::invalid_argument for settings that contradict each other, naming both.
   void validate() const {
     localizer_config::validate();
     faults.validate();
     if (tracking) tracking->validate();
+    if (order == touch_order::active) {
+      next_touch.validate();
+      if (active_candidates == 0)
+        detail::fail(
+            "localization_config: active_candidates = 0; expected at least one "
+            "candidate position per touch for the active order (e.g. 32)");
+      if (headings > 0)
+        detail::fail(
+            "localization_config: order = active ranks moves with a known heading, but "
+            "headings = ",
+            headings, "; use headings = 0 or the protocol's order");
+      if (faults.any())
+        detail::fail(
+            "localization_config: order = active chooses where the sensor goes, but "
+            "faults are set (they are drawn on the protocol's sequence); use the "
+            "protocol's order with faults");
+    }
   }
 };
 namespace detail {
@@ -462,10 +501,25 @@ class basic_localization_experiment {
     filter.reset();
     sequence_result result;
     result.sequence = index;
+    // The active order's stream: candidates and odometry noise, its own per sequence.
+    sim_rng active_rng(scenario_seed(config_.simulator_seed ^ 0x2545F4914F6CDD1DULL, index));
+    touch_location previous{};
     for (std::size_t step = 0; step < sequence.size(); ++step) {
       const protocol_step& st = sequence[step];
-      const touch_location& truth = faulted.truth[step];
+      touch_location truth = faulted.truth[step];
       odometry reported = faulted.reported[step];
+      if constexpr (!pose) {
+        if (config_.order == touch_order::active && step > 0) {
+          truth = choose_next_touch(filter, previous, active_rng);
+          const double sigma = protocol_->odometry_sigma_mm;
+          reported.dx_mm = truth.x_mm - previous.x_mm;
+          reported.dy_mm = truth.y_mm - previous.y_mm;
+          const double nx = active_rng.normal(), ny = active_rng.normal();
+          reported.dx_mm += sigma * nx;
+          reported.dy_mm += sigma * ny;
+        }
+      }
+      previous = truth;
       if (scale != 1.0) {  // the arm measures mm of the object; the map's mm are off by scale
         reported.dx_mm *= scale;
         reported.dy_mm *= scale;
@@ -539,7 +593,7 @@ class basic_localization_experiment {
       const preprocessed_frame pre = preprocess(frame, config_.preprocessing);
       touch_record rec;
       rec.step = step;
-      rec.location = st.location;
+      rec.location = config_.order == touch_order::active && step > 0 ? 0 : st.location;
       rec.true_x_mm = truth.x_mm;
       rec.true_y_mm = truth.y_mm;
       if (step > 0) {
@@ -592,6 +646,32 @@ class basic_localization_experiment {
       }
     }
     return result;
+  }
+
+  // The active order's next location: `active_candidates` positions drawn over the map's
+  // states, ranked by `next_touch` as moves from `from` (the true location of the previous
+  // touch: the arm knows where it moves), the best taken.
+  template <class Filter>
+  touch_location choose_next_touch(const Filter& filter, const touch_location& from,
+                                   sim_rng& rng) const {
+    const auto& grid = filter.grid().base();
+    std::vector<touch_location> places;
+    std::vector<odometry> moves;
+    for (std::size_t k = 0, tries = 0; k < config_.active_candidates; ++tries) {
+      const auto s = grid.state_mm(
+          static_cast<Eigen::Index>(rng.below(static_cast<std::uint64_t>(grid.size()))));
+      // Far enough from the previous touch (after 100 draws per candidate: anywhere).
+      if (std::hypot(s(0) - from.x_mm, s(1) - from.y_mm) < config_.active_min_move_mm &&
+          tries < 100 * config_.active_candidates)
+        continue;
+      ++k;
+      places.push_back({s(0), s(1)});
+      moves.push_back({.dx_mm = s(0) - from.x_mm, .dy_mm = s(1) - from.y_mm});
+    }
+    const next_touch_ranking r = detail::rank_planar_touches(
+        filter, std::span<const odometry>(moves), config_.confidence.radius_mm, config_.next_touch,
+        "localization_experiment (active order)");
+    return places[r.best()];
   }
 
   // Seeds of the scenario's draws: stream 0 for the camera map, index + 1 for sequence index;
