@@ -202,7 +202,7 @@ struct localizer_config {
   /// component. Empty: off. Measured (tacmap-evaluate, realistic, 9 maps, seeds 1-3, 594
   /// sequences; a 20 mm slip before touch 6 of 7): "localized" claims at touch 7 right 157 of
   /// 276 -> 254 of 319, sequences localized 78 -> 237, the claims' ECE 16-18 -> 7.5-9.7
-  /// points; slips at touch 6 of 12 back below 5 mm within 5 touches 352 of 406 -> 368 of
+  /// points; slips at touch 6 of 12 back below 5 mm within 5 touches 352 of 406 -> 367 of
   /// 407; without faults 573 -> 570 localized, recall at touch 6 92.7 -> 91.0 % (touch 7
   /// 93.8 % both), ECE 2.0-3.7 -> 2.6-4.0 points. It costs a copy of the belief per touch,
   /// and a second predict and update at a doubting touch (about 1 % of touches without
