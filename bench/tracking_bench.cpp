@@ -292,6 +292,18 @@ void default_filter_touch_full_noisy(benchmark::State& state) {
   localized_touch(state, latent(true), false, true);
 }
 
+// What the slip recheck (localizer_config::slip_recheck) adds to every touch of a localizer:
+// a copy of the default filter's belief before the move (the recheck's second predict and
+// update run only at a touch that doubts its prediction).
+void default_filter_belief_copy(benchmark::State& state) {
+  auto& f = latent(true);
+  localize(f);
+  for (auto _ : state) {
+    auto before = f.belief();
+    benchmark::DoNotOptimize(before.data());
+  }
+}
+
 }  // namespace
 
 // Wall-clock time, and the CPU time of the whole process: CPU / wall is the number of cores the
@@ -327,3 +339,4 @@ BENCHMARK(default_filter_touch_tracking_on)->Unit(benchmark::kMicrosecond);
 BENCHMARK(default_filter_touch_tracked)->Unit(benchmark::kMicrosecond);
 BENCHMARK(default_filter_touch_full_noisy)->Unit(benchmark::kMicrosecond);
 BENCHMARK(default_filter_touch_tracked_noisy)->Unit(benchmark::kMicrosecond);
+BENCHMARK(default_filter_belief_copy)->Unit(benchmark::kMicrosecond);

@@ -260,6 +260,60 @@ void print_by_touch(const std::map<std::string, early_tally>& tallies,
   }
 }
 
+// --oracle-ceiling: per configuration over every map, the filter's figures under the faults
+// and the same sequences' with the filter told about them (the ceiling), side by side.
+struct ceiling_tally {
+  std::size_t sequences[2] = {0, 0}, localized[2] = {0, 0};
+  tacmap::recovery_count within3[2], within5[2];
+  void add(const tacmap::sequence_result& run, const tacmap::recovery_count& r3,
+           const tacmap::recovery_count& r5, bool told) {
+    const int i = told ? 1 : 0;
+    ++sequences[i];
+    localized[i] += tacmap::localized(run.touches) ? 1U : 0U;
+    within3[i] += r3;
+    within5[i] += r5;
+  }
+};
+
+// "k of n (p %)" for the filter and the ceiling, and the filter's rate over the ceiling's.
+std::string against_ceiling(std::size_t k, std::size_t n, std::size_t k_told, std::size_t n_told) {
+  if (n == 0 || n_told == 0) return "- | - | -";
+  const double a = static_cast<double>(k) / static_cast<double>(n);
+  const double b = static_cast<double>(k_told) / static_cast<double>(n_told);
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "%zu / %zu (%.1f %%) | %zu / %zu (%.1f %%) | %s", k, n, 100.0 * a,
+                k_told, n_told, 100.0 * b,
+                b > 0.0
+                    ? (std::to_string(static_cast<int>(std::lround(100.0 * a / b))) + " %").c_str()
+                    : "-");
+  return buf;
+}
+
+void print_ceilings(const std::map<std::string, ceiling_tally>& tallies,
+                    const std::vector<tacmap::localization_config>& configs) {
+  std::printf(
+      "\n| configuration | figure | the filter | told (the ceiling) | ratio |\n"
+      "|---|---|---|---|---|\n");
+  for (const auto& config : configs) {
+    const auto it = tallies.find(config_label(config));
+    if (it == tallies.end()) continue;
+    const ceiling_tally& t = it->second;
+    std::printf(
+        "| %s | localized | %s |\n", config_label(config).c_str(),
+        against_ceiling(t.localized[0], t.sequences[0], t.localized[1], t.sequences[1]).c_str());
+    // Odometry noise alone has no discrete faults to recover from.
+    if (t.within3[0].faults == 0 && t.within3[1].faults == 0) continue;
+    std::printf("| %s | back within 3 touches of a fault | %s |\n", config_label(config).c_str(),
+                against_ceiling(t.within3[0].recovered, t.within3[0].counted,
+                                t.within3[1].recovered, t.within3[1].counted)
+                    .c_str());
+    std::printf("| %s | back within 5 touches of a fault | %s |\n", config_label(config).c_str(),
+                against_ceiling(t.within5[0].recovered, t.within5[0].counted,
+                                t.within5[1].recovered, t.within5[1].counted)
+                    .c_str());
+  }
+}
+
 // The conditions a run was made under, one line above its tables (issue 34: every condition in
 // the tables): the scenario's name, then each effect that is on, grouped as photograph, sensor
 // and contact.
@@ -568,6 +622,22 @@ int main(int argc, char** argv) try {
       "--touch-order active: what next_touch maximises, verdict (the expected probability "
       "within the verdict's radius; the default) or entropy (the expected entropy "
       "reduction)");
+  bool oracle_ceiling = false;
+  app.add_flag("--oracle-ceiling", oracle_ceiling,
+               "run every sequence again with the filter told about the faults (--fault-oracle "
+               "told for outliers and a slip, the true --odometry-noise as its motion noise) and "
+               "print the filter's figures against that ceiling");
+  bool no_slip_recheck = false;
+  app.add_flag("--no-slip-recheck", no_slip_recheck,
+               "the filter does not look again, as a slip, at a touch that doubts its prediction "
+               "(localizer_config::slip_recheck, on by default)");
+  tacmap::slip_recheck_params recheck;
+  app.add_option("--slip-recheck-doubt", recheck.doubt,
+                 "the slip recheck: the touch's log prediction support below which it runs (-1)")
+      ->check(CLI::Range(-1000.0, 0.0));
+  app.add_option("--slip-recheck-broad", recheck.broad_probability,
+                 "the slip recheck: the slip hypothesis's share of the prediction (0.3)")
+      ->check(CLI::Range(0.001, 0.9));
   app.add_flag("--random-orientation", random_orientation,
                "configurations with headings > 0: each sequence's sensor heading is drawn "
                "uniformly (known-orientation ones keep heading 0)");
@@ -640,6 +710,15 @@ int main(int argc, char** argv) try {
   } catch (const std::invalid_argument& e) {
     throw CLI::ValidationError("faults", e.what());
   }
+  if (oracle_ceiling &&
+      !(faults.outlier_probability > 0.0 || faults.slip_touch > 0 || faults.odometry_sigma_mm))
+    throw CLI::ValidationError("--oracle-ceiling",
+                               "there is no fault to tell the filter about; expected --outliers, "
+                               "--slip-touch or --odometry-noise (kidnaps have no oracle)");
+  if (oracle_ceiling && faults.oracle != tacmap::fault_oracle::none)
+    throw CLI::ValidationError("--oracle-ceiling",
+                               "with --fault-oracle " + oracle_name +
+                                   "; expected --fault-oracle none: the ceiling is the oracle");
   const auto scenario =
       parse_choice<tacmap::scenario_kind>("--scenario", scenario_name,
                                           {{"ideal", tacmap::scenario_kind::ideal},
@@ -747,6 +826,8 @@ int main(int argc, char** argv) try {
     base.self_calibrate = self_calibrate >= 0;
     base.calibration_warmup = self_calibrate > 0 ? static_cast<std::size_t>(self_calibrate) : 0;
     if (tracking) base.tracking = tacmap::default_tracking();
+    base.slip_recheck = recheck;
+    if (no_slip_recheck) base.slip_recheck.reset();
     if (kind == tacmap::measurement_kind::ncc) {
       for (const auto& t : tau_values) {
         auto c = base;
@@ -942,6 +1023,10 @@ int main(int argc, char** argv) try {
                                              "' for writing; check the folder exists");
 
   if (library) {
+    if (oracle_ceiling)
+      throw CLI::ValidationError("--oracle-ceiling",
+                                 "with --library; expected single maps (the library's evaluation "
+                                 "has no oracle)");
     if (maps.size() < 2)
       throw CLI::ValidationError("--library", "a library needs at least two maps (got " +
                                                   std::to_string(maps.size()) +
@@ -992,13 +1077,28 @@ int main(int argc, char** argv) try {
   bool below_floor = false;
   std::map<std::string, confidence_tally> confidence;  // per configuration, over every map
   std::map<std::string, early_tally> by_touch;         // likewise
+  std::map<std::string, ceiling_tally> ceilings;       // --oracle-ceiling, per configuration
+  const auto within3_of = [](const tacmap::sequence_result& r) {
+    return tacmap::fault_recoveries(r.touches, 3);
+  };
+  const auto within5_of = [](const tacmap::sequence_result& r) {
+    return tacmap::fault_recoveries(r.touches, 5);
+  };
+  // The ceiling's configuration: the filter told when each outlier and the slip happened and
+  // their size (fault_oracle::told), and the odometry's true noise as its own motion noise.
+  const auto told_config = [&](tacmap::localization_config c) {
+    if (c.faults.outlier_probability > 0.0 || c.faults.slip_touch > 0)
+      c.faults.oracle = tacmap::fault_oracle::told;
+    if (c.faults.odometry_sigma_mm) c.motion_sigma_mm = std::max(0.01, *c.faults.odometry_sigma_mm);
+    return c;
+  };
   std::fprintf(stderr, "scenario: %s\n", to_string(scenario));
   std::printf("%s%s\n\n", conditions_text(to_string(scenario), sim, effects).c_str(),
               calibration_text.c_str());
   std::printf(
       "| map | configuration | localized | median touches to localize | median final error mm | "
       "median final entropy nats | raised dark: localized | median final P(true appearance) | "
-      "back below 5 mm within 3 touches of the slip / kidnap, of the sequences it moved |\n");
+      "after each fault, back below 5 mm within 3 touches; within 5: back / counted |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
   const std::size_t fault_touch = std::max(faults.slip_touch, faults.kidnap_touch);
   for (const auto& m : maps) {
@@ -1008,10 +1108,14 @@ int main(int argc, char** argv) try {
       if (!quiet)
         progress(done, total, m.name + " " + config_label(config) + " (building the model)");
       tacmap::localization_experiment experiment(m.protocol, config);  // once per map x config
+      // The same sequences with the filter told about the faults (--oracle-ceiling).
+      std::optional<tacmap::localization_experiment> ceiling_experiment;
+      if (oracle_ceiling) ceiling_experiment.emplace(m.protocol, told_config(config));
       std::size_t successes = 0;
       std::vector<double> ttl, final_errors, final_entropies, right_appearance;
       early_tally& early = by_touch[config_label(config)];
-      std::size_t dark_sequences = 0, dark_successes = 0, recoveries = 0, moved = 0;
+      std::size_t dark_sequences = 0, dark_successes = 0, moved = 0;
+      tacmap::recovery_count within3, within5;  // after each injected fault
       for (std::size_t q = 0; q < n; ++q) {
         const auto run = experiment.run(q);
         const bool ok = tacmap::localized(run.touches);
@@ -1026,7 +1130,14 @@ int main(int argc, char** argv) try {
         const bool was_moved = std::any_of(run.touches.begin(), run.touches.end(),
                                            [](const auto& r) { return r.moved_unseen; });
         moved += was_moved ? 1U : 0U;
-        if (was_moved && tacmap::recovered(run.touches, fault_touch, 3)) ++recoveries;
+        within3 += tacmap::fault_recoveries(run.touches, 3);
+        within5 += tacmap::fault_recoveries(run.touches, 5);
+        if (ceiling_experiment) {
+          auto& c = ceilings[config_label(config)];
+          const auto ceiling_run = ceiling_experiment->run(q);
+          c.add(run, within3_of(run), within5_of(run), false);
+          c.add(ceiling_run, within3_of(ceiling_run), within5_of(ceiling_run), true);
+        }
         if (run.raised_dark) {
           ++dark_sequences;
           dark_successes += ok ? 1U : 0U;
@@ -1074,12 +1185,16 @@ int main(int argc, char** argv) try {
         std::snprintf(appearance_text, sizeof appearance_text, "%.3f",
                       tacmap::median(right_appearance));
       std::string recovery_text = "-";
-      if (fault_touch > 0) {
-        recovery_text = std::to_string(recoveries) + " / " + std::to_string(moved);
-        if (moved < n)
-          recovery_text += " (" + std::to_string(n - moved) + " of " + std::to_string(n) +
-                           " not moved: no room on the map)";
+      if (within3.faults > 0) {
+        recovery_text = std::to_string(within3.recovered) + " / " +
+                        std::to_string(within3.counted) + "; " + std::to_string(within5.recovered) +
+                        " / " + std::to_string(within5.counted);
+        if (within5.counted < within5.faults)
+          recovery_text += " (" + std::to_string(within5.faults) + " faults)";
       }
+      if (fault_touch > 0 && moved < n)
+        recovery_text += " (" + std::to_string(n - moved) + " of " + std::to_string(n) +
+                         " not moved: no room on the map)";
       std::printf("| %s | %s | %zu / %zu | %s | %.2f | %.2f | %zu / %zu | %s | %s |\n",
                   m.name.c_str(), config_label(config).c_str(), successes, n, ttl_text,
                   tacmap::median(final_errors), tacmap::median(final_entropies), dark_successes,
@@ -1091,6 +1206,7 @@ int main(int argc, char** argv) try {
   }
   print_confidence(confidence, configs);
   print_by_touch(by_touch, configs);
+  if (oracle_ceiling) print_ceilings(ceilings, configs);
   csv.close();
   if (!csv)
     tacmap::detail::fail<std::runtime_error>("tacmap-evaluate: writing '", output, "' failed");

@@ -84,6 +84,37 @@ struct robust_motion_params {
   }
 };
 
+/// A second look at a touch that doubts its prediction (`localizer_config::slip_recheck`): the
+/// touch's update is done again from the belief before the move, predicted with a broad
+/// component of `broad_probability` and `broad_sigma_mm` on top of the filter's own motion
+/// model — the hypothesis that the object slipped in the grasp before this touch, weighed by
+/// the touch like any other. The floor alone (`lost_probability`, 0.001) gives a slip's place
+/// too little prior mass for one touch of an ambiguous map to move the belief there, and the
+/// belief stays, confidently, on the place it had before the slip; a broad component on every
+/// move costs a predict's time and hedges claims without faults, while the touches that doubt
+/// their prediction are few (about 1 % without faults).
+struct slip_recheck_params {
+  /// The touch's `update_report::log_prediction_support` below which the touch is looked at
+  /// again: it is e^-doubt times more probable anywhere on the map than where the filter
+  /// expected it.
+  double doubt = -1.0;
+  double broad_probability = 0.3;  ///< the slip hypothesis's share of the prediction, [0, 1)
+  double broad_sigma_mm = 10.0;    ///< its spread, mm per axis
+
+  void validate() const {
+    if (!(std::isfinite(doubt) && doubt <= 0.0))
+      detail::fail("slip_recheck_params: doubt = ", doubt,
+                   "; expected a finite log Bayes factor <= 0 (e.g. -1: the touch 2.7 times "
+                   "more probable elsewhere); turn the recheck off with an empty slip_recheck");
+    if (!(std::isfinite(broad_probability) && broad_probability > 0.0 && broad_probability < 1.0))
+      detail::fail("slip_recheck_params: broad_probability = ", broad_probability,
+                   "; expected a probability in (0, 1) (e.g. 0.3)");
+    detail::check_range("slip_recheck_params", "broad_sigma_mm", broad_sigma_mm,
+                        detail::min_sigma_mm, 1000.0, " mm", "the slip's spread",
+                        "give it in millimetres (e.g. 10)");
+  }
+};
+
 /// `M`'s prediction mixed with a uniform floor (see the file's comment). Models
 /// `motion_model<G>` for every grid `M` does. Keeps the wide and broad components' workspaces
 /// between predictions, like the base models: one object is not reentrant (one filter per
@@ -257,6 +288,12 @@ class robust_motion {
   [[nodiscard]] const M& base() const { return base_; }
   [[nodiscard]] M& base() { return base_; }
   [[nodiscard]] const robust_motion_params& params() const { return params_; }
+  /// Replaces the parameters (`slip_recheck_params`: one prediction with a broad component).
+  /// Throws std::invalid_argument, the model unchanged, for parameters `validate` refuses.
+  void set_params(const robust_motion_params& params) {
+    params.validate();
+    params_ = params;
+  }
 
  private:
   // Radius r of the box whose three passes have variance r (r + 1) closest to sigma^2 (px).

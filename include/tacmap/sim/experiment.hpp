@@ -504,6 +504,7 @@ class basic_localization_experiment {
     // The active order's stream: candidates and odometry noise, its own per sequence.
     sim_rng active_rng(scenario_seed(config_.simulator_seed ^ 0x2545F4914F6CDD1DULL, index));
     touch_location previous{};
+    std::size_t updates = 0;  // accepted touches so far
     for (std::size_t step = 0; step < sequence.size(); ++step) {
       const protocol_step& st = sequence[step];
       touch_location truth = faulted.truth[step];
@@ -525,30 +526,37 @@ class basic_localization_experiment {
         reported.dy_mm *= scale;
       }
       bool lost_track = false;
+      // The move: the filter's prediction, then what the oracle tells it (sim/faults.hpp).
+      const auto move = [&] {
+        if constexpr (pose) {
+          // The arm reports its motion in the sensor's own frame: R(-heading) (dx, dy).
+          const double c = std::cos(heading), sn = std::sin(heading);
+          const double dx = reported.dx_mm, dy = reported.dy_mm;
+          filter.predict(
+              {.du_mm = c * dx + sn * dy, .dv_mm = -sn * dx + c * dy, .dtheta_rad = 0.0});
+        } else {
+          filter.predict(reported);
+        }
+        const exploration_faults& f = config_.faults;
+        if (f.oracle == fault_oracle::transition)
+          detail::spread_over_ring(filter, f.outlier_mm, f.outlier_probability);
+        if (f.oracle == fault_oracle::told) {
+          if (faulted.outlier[step] != 0) detail::spread_over_ring(filter, f.outlier_mm, 1.0);
+          if (faulted.slipped && step + 1 == f.slip_touch)
+            detail::spread_over_ring(filter, f.slip_mm, 1.0);
+        }
+      };
+      // The belief before the move, for the slip recheck (`localizer_config::slip_recheck`).
+      std::optional<typename Filter::belief_type> before;
+      if (step > 0 && updates > 0 && config_.slip_recheck) before = filter.belief();
       if (step > 0) {
         try {
-          if constexpr (pose) {
-            // The arm reports its motion in the sensor's own frame: R(-heading) (dx, dy).
-            const double c = std::cos(heading), sn = std::sin(heading);
-            const double dx = reported.dx_mm, dy = reported.dy_mm;
-            filter.predict(
-                {.du_mm = c * dx + sn * dy, .dv_mm = -sn * dx + c * dy, .dtheta_rad = 0.0});
-          } else {
-            filter.predict(reported);
-          }
+          move();
         } catch (const std::domain_error&) {
           // The odometry carried every state the belief allowed off the map (a fault the
           // motion model trusts): start again from a uniform belief, as a user would.
           filter.reset();
           lost_track = true;
-        }
-        const exploration_faults& f = config_.faults;
-        if (!lost_track && f.oracle == fault_oracle::transition)
-          detail::spread_over_ring(filter, f.outlier_mm, f.outlier_probability);
-        if (!lost_track && f.oracle == fault_oracle::told) {
-          if (faulted.outlier[step] != 0) detail::spread_over_ring(filter, f.outlier_mm, 1.0);
-          if (faulted.slipped && step + 1 == f.slip_touch)
-            detail::spread_over_ring(filter, f.slip_mm, 1.0);
         }
       }
       // Where the sensor really presses on the object: the true map pose carried by the
@@ -613,10 +621,20 @@ class basic_localization_experiment {
           belief_array<typename Filter::grid_type> ll(filter.grid().size());
           filter.measurement_model().log_likelihood(filter.grid(), pre.pixels, ll);
           report = filter.update_log_likelihood(ll);
+          if (before && !lost_track && report.log_prediction_support < config_.slip_recheck->doubt)
+            detail::recheck_as_slip(
+                filter, *before, move, [&] { (void)filter.update_log_likelihood(ll); },
+                *config_.slip_recheck);
           result.log_likelihoods.push_back(std::move(ll));
         } else {
           report = filter.update(pre.pixels);
+          // As the localizer does (`detail::predict_and_update`).
+          if (before && !lost_track && report.log_prediction_support < config_.slip_recheck->doubt)
+            detail::recheck_as_slip(
+                filter, *before, move, [&] { (void)filter.update(pre.pixels); },
+                *config_.slip_recheck);
         }
+        ++updates;
         rec.log_marginal_likelihood = report.log_marginal_likelihood();
         rec.log_prediction_support = report.log_prediction_support;
         rec.contradicted = report.log_prediction_support < config_.confidence.contradiction;

@@ -20,6 +20,7 @@
 #include <cstddef>
 #include <numbers>
 #include <optional>
+#include <vector>
 
 #include "tacmap/config.hpp"
 #include "tacmap/grid/planar_grid.hpp"
@@ -195,6 +196,48 @@ template <class Record>
   std::size_t first_good = touches.size();  // first touch (0-based) of the final run below
   while (first_good > 0 && touches[first_good - 1].error_mm < threshold_mm) --first_good;
   return first_good < touches.size() && first_good + 1 <= from + within;
+}
+
+/// How one sequence came back after its injected faults (`fault_recoveries`).
+struct recovery_count {
+  std::size_t faults = 0;     ///< touches right after an injected fault
+  std::size_t counted = 0;    ///< of those, the faults whose recovery could be judged
+  std::size_t recovered = 0;  ///< of those, the faults recovered from in time
+  recovery_count& operator+=(const recovery_count& o) {
+    faults += o.faults;
+    counted += o.counted;
+    recovered += o.recovered;
+    return *this;
+  }
+};
+
+/// "Recovered within `within` touches" after each injected fault of one sequence: a touch whose
+/// record says a fault happened before it (`odometry_outlier` or `moved_unseen`) at 0-based
+/// index j is recovered from when some touch in [j, j + within] has the estimate within
+/// `threshold_mm` of the truth and every touch after it does too, up to the next fault or the
+/// end (`recovered`'s rule, `from` = j + 1, the next fault closing the window). A fault is
+/// counted when it was recovered from or its window holds `within` touches after it: a fault
+/// too close to the end, or to the next fault, to tell is not counted as a failure.
+template <class Record>
+[[nodiscard]] recovery_count fault_recoveries(const std::vector<Record>& touches,
+                                              std::size_t within, double threshold_mm = 5.0) {
+  recovery_count out;
+  const std::size_t n = touches.size();
+  const auto is_fault = [&](std::size_t i) {
+    return touches[i].odometry_outlier || touches[i].moved_unseen;
+  };
+  for (std::size_t j = 0; j < n; ++j) {
+    if (!is_fault(j)) continue;
+    ++out.faults;
+    std::size_t end = j + 1;  // one past the window: the next fault or the end
+    while (end < n && !is_fault(end)) ++end;
+    std::size_t first_good = end;  // first touch of the window's final run below the threshold
+    while (first_good > j && touches[first_good - 1].error_mm < threshold_mm) --first_good;
+    const bool back = first_good < end && first_good <= j + within;
+    if (back || j + within < end) ++out.counted;
+    if (back) ++out.recovered;
+  }
+  return out;
 }
 
 }  // namespace tacmap
