@@ -781,7 +781,9 @@ using planar_filter_for =
     bayes_filter<latent_grid<planar_grid<float>>, robust_motion<latent_motion<odometry_gaussian>>,
                  appearance_likelihood<typename M::planar_model>>;
 namespace detail {
-struct no_pose_filter {};
+struct no_pose_filter {
+  struct saved_state {};
+};
 template <class M>
 struct pose_filter_of {
   using type = no_pose_filter;
@@ -823,8 +825,8 @@ inline robust_motion_params robust_params(const localizer_config& c) {
 ///    the restarted update's `log_prediction_support` is then -inf (the prediction had no
 ///    support).
 /// Any other failure is the model's (a likelihood NaN, +inf or -inf everywhere, a degenerate
-/// model's domain_error) and propagates with the belief as the failed step left it: a restart
-/// would hide it, and the same touch would fail again from uniform.
+/// model's domain_error) and propagates: a restart would hide it, and the same touch would fail
+/// again from uniform. (`localizer_step` then puts the state before the prediction back.)
 template <class Filter, class Predict, class Measurement>
 std::optional<update_report> predict_and_update(Filter& filter, Predict&& predict,
                                                 const Measurement* z, std::size_t& touches,
@@ -862,19 +864,32 @@ struct step_outcome {
 
 /// THE step of both front doors (`basic_localizer`, `basic_library_localizer`; the paper's
 /// Table 1 with the verdict): predict, update, restart from uniform on one of the two
-/// documented causes (`predict_and_update`, counted in `restarts`), assess.
+/// documented causes (`predict_and_update`, counted in `restarts`), assess. All or nothing:
+/// the filter's state is saved into `saved` first and, when any part throws (a model's
+/// domain_error after the motion was applied, a contradiction from uniform, an allocation),
+/// the belief, tracking's bookkeeping and both counters are put back before the exception
+/// propagates, so a refused touch leaves the localizer exactly as it was.
 template <class Filter, class Predict, class Measurement>
 step_outcome<Filter> localizer_step(Filter& filter, Predict&& predict, const Measurement* z,
                                     const confidence_params& params, std::size_t& touches,
-                                    std::size_t& restarts) {
-  bool restarted = false;
-  std::optional<update_report> report =
-      predict_and_update(filter, std::forward<Predict>(predict), z, touches, restarted);
-  if (restarted) ++restarts;
-  auto est = filter.estimate();
-  const tacmap::confidence conf =
-      report ? assess(filter, est, *report, params) : assess(filter, est, params);
-  return {std::move(report), std::move(est), conf, restarted};
+                                    std::size_t& restarts, typename Filter::saved_state& saved) {
+  filter.save_state(saved);
+  const std::size_t touches_before = touches, restarts_before = restarts;
+  try {
+    bool restarted = false;
+    std::optional<update_report> report =
+        predict_and_update(filter, std::forward<Predict>(predict), z, touches, restarted);
+    if (restarted) ++restarts;
+    auto est = filter.estimate();
+    const tacmap::confidence conf =
+        report ? assess(filter, est, *report, params) : assess(filter, est, params);
+    return {std::move(report), std::move(est), conf, restarted};
+  } catch (...) {
+    filter.restore_state(saved);
+    touches = touches_before;
+    restarts = restarts_before;
+    throw;
+  }
 }
 
 }  // namespace detail
@@ -1358,12 +1373,30 @@ class basic_localizer {
                    "frame's geometry");
     // Preprocess (and let the policy check the touch, P2) first: a malformed frame or a
     // descriptor that fails on it throws before anything changes.
-    const preprocessed_frame pre = preprocess(correction_.apply(frame), config_.preprocessing);
-    if constexpr (requires { measurement_.check_touch(config_, pre.pixels); })
-      if (pre.accepted()) measurement_.check_touch(config_, pre.pixels);
-    touch_result r = with_filter([&](auto& f) { return run(f, pre, moved); });
-    ++calls_;
-    return r;
+    // The self-calibration learns from every frame it sees: a refused touch must not teach it
+    // (the filter's half is made all or nothing by localizer_step).
+    std::optional<detail::sensor_correction> calibration_before;
+    if (correction_.estimate()) calibration_before = correction_;
+    try {
+      const preprocessed_frame pre = preprocess(correction_.apply(frame), config_.preprocessing);
+      if constexpr (requires { measurement_.check_touch(config_, pre.pixels); })
+        if (pre.accepted()) measurement_.check_touch(config_, pre.pixels);
+      touch_result r = with_filter([&](auto& f) { return run(f, pre, moved); });
+      ++calls_;
+      return r;
+    } catch (...) {
+      if (calibration_before) correction_ = std::move(*calibration_before);
+      throw;
+    }
+  }
+
+  // The saved filter state of localizer_step (one belief's storage, reused every touch).
+  template <class Filter>
+  typename Filter::saved_state& saved_state_for() {
+    if constexpr (std::is_same_v<Filter, planar_filter_type>)
+      return planar_saved_;
+    else
+      return pose_saved_;
   }
 
   template <class Filter>
@@ -1379,7 +1412,8 @@ class basic_localizer {
           else
             filter.predict(odometry{.dx_mm = moved->du_mm, .dy_mm = moved->dv_mm});
         },
-        pre.accepted() ? &pre.pixels : nullptr, config_.confidence, touches_, restarts_);
+        pre.accepted() ? &pre.pixels : nullptr, config_.confidence, touches_, restarts_,
+        saved_state_for<Filter>());
     touch_result r;
     r.restarted = out.restarted;
     r.rejection = pre.rejection;
@@ -1430,6 +1464,8 @@ class basic_localizer {
   Measurement measurement_;
   std::optional<planar_filter_type> planar_;
   std::optional<pose_filter_type> pose_;
+  typename planar_filter_type::saved_state planar_saved_;
+  typename pose_filter_type::saved_state pose_saved_;
   std::size_t calls_ = 0;
   std::size_t touches_ = 0;
   std::size_t restarts_ = 0;
