@@ -1139,6 +1139,22 @@ class descriptor_measurement {
   D descriptor_{};
 };
 
+/// Whether a `basic_localizer` is compiled with the (x, y, theta) filter, so that
+/// `localizer_config::headings` > 0 (unknown heading) can be chosen at run time. A compile-time
+/// choice because that filter (the policy's rotated model, the pose motion, every step over
+/// them) is compiled in every translation unit that builds the localizer, used or not: for a
+/// descriptor of your own that was most of the translation unit's compile time (with
+/// `tacmap::precompiled` linked, 30 s against 14 s for `localizer`, which precompiled covers).
+enum class heading_support {
+  known,      ///< the planar filter only; `headings` > 0 is refused, naming this setting
+  localized,  ///< both filters (the policy needs P1: a pose model); `headings` at run time
+};
+
+/// `localized` for a policy with a pose model (P1), else `known`: `basic_localizer<M>`'s default.
+template <class M>
+inline constexpr heading_support default_heading_support =
+    localizes_headings<M> ? heading_support::localized : heading_support::known;
+
 /// One object from map to estimate, generic over its measurement policy (`localizer_measurement`
 /// above): `localizer` runs the shipped models, `descriptor_localizer<D>` a descriptor of your
 /// own, with the same appearance hypotheses, robust motion, restarts, verdict and pose grid.
@@ -1153,17 +1169,25 @@ class descriptor_measurement {
 ///
 ///     tacmap::descriptor_localizer<my_descriptor> mine(map, 0.2, config, sensor, my_descriptor{});
 ///
+/// `Headings` (`heading_support`): whether the (x, y, theta) filter is compiled in; by default
+/// when the policy has a pose model (P1).
+///
 /// Preparing the map (the measurement model's descriptors of every window) happens once, in
 /// the constructor; `reset()` starts a new exploration on the same map. Not thread-safe: one
 /// localizer per thread.
-template <localizer_measurement Measurement>
+template <localizer_measurement Measurement,
+          heading_support Headings = default_heading_support<Measurement>>
 class basic_localizer {
  public:
   using measurement_policy = Measurement;
+  static constexpr bool has_headings = Headings == heading_support::localized;
+  static_assert(!has_headings || localizes_headings<Measurement>,
+                "heading_support::localized needs the measurement policy's (x, y, theta) model: "
+                "typename P::pose_model and p.pose(config, map, pose_grid) (localizer.hpp, P1)");
   using planar_filter_type = planar_filter_for<Measurement>;
-  /// `detail::no_pose_filter` for a policy without P1.
-  using pose_filter_type = pose_filter_for<Measurement>;
-  static constexpr bool has_headings = localizes_headings<Measurement>;
+  /// `detail::no_pose_filter` without the (x, y, theta) filter (`Headings`).
+  using pose_filter_type =
+      std::conditional_t<has_headings, pose_filter_for<Measurement>, detail::no_pose_filter>;
 
   /// Throws std::invalid_argument for an empty or non-finite map, a scale that is not a finite
   /// positive number, a map smaller than the sensor's footprint, or an invalid configuration
@@ -1184,6 +1208,13 @@ class basic_localizer {
       planar_.emplace(make_planar_filter(measurement_, config_, map_, mm_per_px_, window_));
     } else if constexpr (has_headings) {
       pose_.emplace(make_pose_filter(measurement_, config_, map_, mm_per_px_, window_));
+    } else if constexpr (localizes_headings<Measurement>) {
+      detail::fail("localizer: headings = ", config_.headings, ", but this localizer of ",
+                   detail::type_name<Measurement>(),
+                   " was compiled without the (x, y, theta) filter (heading_support::known, "
+                   "descriptor_localizer's default: it halves the compile time); use "
+                   "descriptor_localizer<D, tacmap::heading_support::localized> (or "
+                   "basic_localizer<P, tacmap::heading_support::localized>), or headings = 0");
     } else {
       detail::fail("localizer: headings = ", config_.headings, ", but the measurement policy ",
                    detail::type_name<Measurement>(),
@@ -1481,12 +1512,15 @@ class localizer : public basic_localizer<configured_models> {
 };
 
 /// The front door for a descriptor of your own (`descriptor_measurement<D>`): every capability
-/// of `localizer`, C++ only.
+/// of `localizer`, C++ only. Known heading unless asked (`heading_support`): the (x, y, theta)
+/// filter is compiled in only with `heading_support::localized`.
 ///
 ///     tacmap::descriptor_localizer<my_descriptor> loc(map, 0.2);  // D{} by default
 ///     auto r = loc.touch(frame);
-template <descriptor D>
-using descriptor_localizer = basic_localizer<descriptor_measurement<D>>;
+///     tacmap::descriptor_localizer<my_descriptor, tacmap::heading_support::localized> turned(
+///         map, 0.2, {.headings = 36});
+template <descriptor D, heading_support Headings = heading_support::known>
+using descriptor_localizer = basic_localizer<descriptor_measurement<D>, Headings>;
 
 }  // namespace tacmap
 

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <type_traits>
 
 #include "../measurement/raw_patch_descriptor.hpp"
 #include "tacmap/descriptor/dense_sift.hpp"
@@ -340,7 +341,17 @@ TEST_CASE("the cost guard refuses a per-window preparation above the budget, wit
 TEST_CASE("a custom descriptor with unknown heading, and appearance = unsigned refused by name") {
   auto c = fast();
   c.headings = 4;
-  tacmap::descriptor_localizer<tacmap_test::raw_patch> loc(test_map(), mm_per_px, c);
+  // Planar unless asked (compile time): the refusal names the setting that compiles it in.
+  using planar_only = tacmap::descriptor_localizer<tacmap_test::raw_patch>;
+  static_assert(!planar_only::has_headings);
+  static_assert(std::is_same_v<planar_only::pose_filter_type, tacmap::detail::no_pose_filter>);
+  CHECK(tacmap_test::message_of([&] {
+          planar_only loc(test_map(), mm_per_px, c);
+        }).find("use descriptor_localizer<D, tacmap::heading_support::localized>") !=
+        std::string::npos);
+  static_assert(tacmap::localizer::has_headings);  // the default keeps both filters
+  tacmap::descriptor_localizer<tacmap_test::raw_patch, tacmap::heading_support::localized> loc(
+      test_map(), mm_per_px, c);
   REQUIRE(loc.pose_filter() != nullptr);
   const auto r = loc.touch(frame_at(3, 4));
   CHECK(r.accepted());
