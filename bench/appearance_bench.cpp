@@ -132,6 +132,22 @@ void open_set_step(benchmark::State& state) {
 }
 BENCHMARK(open_set_step)->Unit(benchmark::kMicrosecond);
 
+// What makes a touch all or nothing (detail::localizer_step): the localizer's filter state
+// saved before each touch (one belief copy into reused storage), against
+// planar_touch_localizer, which includes it.
+void planar_touch_localizer_save_state(benchmark::State& state) {
+  const auto map = bench_map();
+  tacmap::localizer loc(map, 3.4 / 3.0);
+  loc.touch(frame_at(map, 30, 40));
+  const auto& filter = *loc.planar_filter();
+  tacmap::planar_localizer_filter::saved_state saved;
+  for (auto _ : state) {
+    filter.save_state(saved);
+    benchmark::ClobberMemory();
+  }
+}
+BENCHMARK(planar_touch_localizer_save_state)->Unit(benchmark::kMicrosecond);
+
 void pose_touch_fixed(benchmark::State& state) {
   const auto map = bench_map();
   const auto grid = pose::paper(36);

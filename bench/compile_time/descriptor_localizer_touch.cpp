@@ -1,6 +1,7 @@
 // Compile-time measurement (README, "Compile time"; issue 33): a translation unit that runs the
-// generic front door with a user's descriptor, tacmap::descriptor_localizer<D> (its planar and
-// pose filters: latent appearance, robust motion, descriptor_likelihood<D>), against
+// generic front door with a user's descriptor, tacmap::descriptor_localizer<D> (its planar
+// filter: latent appearance, robust motion, descriptor_likelihood<D>; the (x, y, theta) filter
+// only with heading_support::localized, descriptor_localizer_headings_touch.cpp), against
 // localizer_touch.cpp (the default instantiation).
 #include <cmath>
 #include <stdexcept>

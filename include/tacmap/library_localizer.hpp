@@ -378,16 +378,28 @@ class basic_library_localizer {
                    " at ", sensor_.pitch_mm, " mm; build it with the frame's geometry");
     // Preprocess (and let the policy check the touch) first: a malformed frame throws before
     // anything changes.
-    const preprocessed_frame pre = preprocess(correction_.apply(frame), config_.preprocessing);
-    if constexpr (requires { measurement_.check_touch(config_, pre.pixels); })
-      if (pre.accepted()) measurement_.check_touch(config_, pre.pixels);
-    const std::vector<image<float>> view{pre.pixels};  // one scale: one view for every map
-    const auto out = detail::localizer_step(
-        filter_,
-        [&] {
-          if (calls_ > 0 && moved) filter_.predict(*moved);
-        },
-        pre.accepted() ? &view : nullptr, config_.confidence, touches_, restarts_);
+    // All or nothing (the filter's half by localizer_step): a refused touch must not teach the
+    // self-calibration either.
+    std::optional<detail::sensor_correction> calibration_before;
+    if (correction_.estimate()) calibration_before = correction_;
+    std::optional<detail::step_outcome<filter_type>> stepped;
+    preprocessed_frame pre;
+    try {
+      pre = preprocess(correction_.apply(frame), config_.preprocessing);
+      if constexpr (requires { measurement_.check_touch(config_, pre.pixels); })
+        if (pre.accepted()) measurement_.check_touch(config_, pre.pixels);
+      const std::vector<image<float>> view{pre.pixels};  // one scale: one view for every map
+      stepped.emplace(detail::localizer_step(
+          filter_,
+          [&] {
+            if (calls_ > 0 && moved) filter_.predict(*moved);
+          },
+          pre.accepted() ? &view : nullptr, config_.confidence, touches_, restarts_, saved_));
+    } catch (...) {
+      if (calibration_before) correction_ = std::move(*calibration_before);
+      throw;
+    }
+    const auto& out = *stepped;
     ++calls_;
     library_touch_result r;
     r.restarted = out.restarted;
@@ -423,6 +435,7 @@ class basic_library_localizer {
   Measurement measurement_;
   filter_type filter_;
   std::vector<std::string> warnings_;
+  typename filter_type::saved_state saved_;  // localizer_step's (one belief's storage)
   std::size_t calls_ = 0;
   std::size_t touches_ = 0;
   std::size_t restarts_ = 0;

@@ -514,6 +514,11 @@ inline constexpr const char* coarse_photo_cost =
                                                                   Eigen::Index longer_side_px,
                                                                   const std::string& who) {
   sensor.validate();
+  // The scale's own range first (as checked_tactile_window does later): a scale outside it is
+  // the input's fault, whatever the sensor.
+  detail::check_range(who.c_str(), "mm_per_px", photo_mm_per_px, detail::min_mm_per_px,
+                      detail::max_mm_per_px, " mm per px", "the map's scale",
+                      "give the photograph's scale in millimetres per pixel (e.g. 0.2)");
   const double pitch = sensor.pitch_mm;
   const double coarsest = pitch / localizer_config::min_px_per_taxel;
   constexpr double slack = 1e-9;  // 3.4 / 3 given as 1.1333 is the same scale
@@ -932,7 +937,9 @@ using planar_filter_for =
     bayes_filter<latent_grid<planar_grid<float>>, robust_motion<latent_motion<odometry_gaussian>>,
                  appearance_likelihood<typename M::planar_model>>;
 namespace detail {
-struct no_pose_filter {};
+struct no_pose_filter {
+  struct saved_state {};
+};
 template <class M>
 struct pose_filter_of {
   using type = no_pose_filter;
@@ -1004,18 +1011,24 @@ bool recheck_as_slip(Filter& filter, const typename Filter::belief_type& before,
 ///    the restarted update's `log_prediction_support` is then -inf (the prediction had no
 ///    support).
 /// Any other failure is the model's (a likelihood NaN, +inf or -inf everywhere, a degenerate
-/// model's domain_error) and propagates with the belief as the failed step left it: a restart
-/// would hide it, and the same touch would fail again from uniform.
+/// model's domain_error) and propagates: a restart would hide it, and the same touch would fail
+/// again from uniform. (`localizer_step` then puts the state before the prediction back.)
 /// With `recheck`, a touch whose `log_prediction_support` is below `recheck->doubt` is updated
 /// again as a slip (`recheck_as_slip`, from a copy of the belief before `predict`); the report
 /// stays the first update's.
 template <class Filter, class Predict, class Measurement>
 std::optional<update_report> predict_and_update(
     Filter& filter, Predict&& predict, const Measurement* z, std::size_t& touches, bool& restarted,
-    const std::optional<slip_recheck_params>& recheck = std::nullopt) {
-  // The belief before the move, for a second look at a touch that doubts its prediction.
-  std::optional<typename Filter::belief_type> before;
-  if (recheck && z != nullptr && touches > 0) before = filter.belief();
+    const std::optional<slip_recheck_params>& recheck = std::nullopt,
+    const typename Filter::belief_type* saved_before = nullptr) {
+  // The belief before the move, for a second look at a touch that doubts its prediction: the
+  // caller's saved copy (localizer_step's) where there is one, else a copy made here.
+  std::optional<typename Filter::belief_type> own_copy;
+  const typename Filter::belief_type* before = nullptr;
+  if (recheck && z != nullptr && touches > 0) {
+    if (saved_before == nullptr) saved_before = &own_copy.emplace(filter.belief());
+    before = saved_before;
+  }
   try {
     predict();
   } catch (const std::domain_error&) {
@@ -1053,20 +1066,33 @@ struct step_outcome {
 
 /// THE step of both front doors (`basic_localizer`, `basic_library_localizer`; the paper's
 /// Table 1 with the verdict): predict, update, restart from uniform on one of the two
-/// documented causes (`predict_and_update`, counted in `restarts`), assess.
+/// documented causes (`predict_and_update`, counted in `restarts`), assess. All or nothing:
+/// the filter's state is saved into `saved` first and, when any part throws (a model's
+/// domain_error after the motion was applied, a contradiction from uniform, an allocation),
+/// the belief, tracking's bookkeeping and both counters are put back before the exception
+/// propagates, so a refused touch leaves the localizer exactly as it was.
 template <class Filter, class Predict, class Measurement>
 step_outcome<Filter> localizer_step(
     Filter& filter, Predict&& predict, const Measurement* z, const confidence_params& params,
-    std::size_t& touches, std::size_t& restarts,
+    std::size_t& touches, std::size_t& restarts, typename Filter::saved_state& saved,
     const std::optional<slip_recheck_params>& recheck = std::nullopt) {
-  bool restarted = false;
-  std::optional<update_report> report =
-      predict_and_update(filter, std::forward<Predict>(predict), z, touches, restarted, recheck);
-  if (restarted) ++restarts;
-  auto est = filter.estimate();
-  const tacmap::confidence conf =
-      report ? assess(filter, est, *report, params) : assess(filter, est, params);
-  return {std::move(report), std::move(est), conf, restarted};
+  filter.save_state(saved);
+  const std::size_t touches_before = touches, restarts_before = restarts;
+  try {
+    bool restarted = false;
+    std::optional<update_report> report = predict_and_update(
+        filter, std::forward<Predict>(predict), z, touches, restarted, recheck, &saved.belief());
+    if (restarted) ++restarts;
+    auto est = filter.estimate();
+    const tacmap::confidence conf =
+        report ? assess(filter, est, *report, params) : assess(filter, est, params);
+    return {std::move(report), std::move(est), conf, restarted};
+  } catch (...) {
+    filter.restore_state(saved);
+    touches = touches_before;
+    restarts = restarts_before;
+    throw;
+  }
 }
 
 }  // namespace detail
@@ -1321,6 +1347,23 @@ class descriptor_measurement {
   D descriptor_{};
 };
 
+/// Whether a `basic_localizer` is compiled with the (x, y, theta) filter, so that
+/// `localizer_config::headings` > 0 (unknown heading) can be chosen at run time. A compile-time
+/// choice because that filter (the policy's rotated model, the pose motion, every step over
+/// them) is compiled in every translation unit that builds the localizer, used or not:
+/// `tacmap::precompiled` holds it for `localizer`, not for a descriptor of your own, where it
+/// was a fifth of the translation unit's compile time (g++ 12 -O2, CPU: 24 s planar only, 31 s
+/// with it; bench/compile_time/).
+enum class heading_support {
+  known,      ///< the planar filter only; `headings` > 0 is refused, naming this setting
+  localized,  ///< both filters (the policy needs P1: a pose model); `headings` at run time
+};
+
+/// `localized` for a policy with a pose model (P1), else `known`: `basic_localizer<M>`'s default.
+template <class M>
+inline constexpr heading_support default_heading_support =
+    localizes_headings<M> ? heading_support::localized : heading_support::known;
+
 /// One object from map to estimate, generic over its measurement policy (`localizer_measurement`
 /// above): `localizer` runs the shipped models, `descriptor_localizer<D>` a descriptor of your
 /// own, with the same appearance hypotheses, robust motion, restarts, verdict and pose grid.
@@ -1335,17 +1378,25 @@ class descriptor_measurement {
 ///
 ///     tacmap::descriptor_localizer<my_descriptor> mine(map, 0.2, config, sensor, my_descriptor{});
 ///
+/// `Headings` (`heading_support`): whether the (x, y, theta) filter is compiled in; by default
+/// when the policy has a pose model (P1).
+///
 /// Preparing the map (the measurement model's descriptors of every window) happens once, in
 /// the constructor; `reset()` starts a new exploration on the same map. Not thread-safe: one
 /// localizer per thread.
-template <localizer_measurement Measurement>
+template <localizer_measurement Measurement,
+          heading_support Headings = default_heading_support<Measurement>>
 class basic_localizer {
  public:
   using measurement_policy = Measurement;
+  static constexpr bool has_headings = Headings == heading_support::localized;
+  static_assert(!has_headings || localizes_headings<Measurement>,
+                "heading_support::localized needs the measurement policy's (x, y, theta) model: "
+                "typename P::pose_model and p.pose(config, map, pose_grid) (localizer.hpp, P1)");
   using planar_filter_type = planar_filter_for<Measurement>;
-  /// `detail::no_pose_filter` for a policy without P1.
-  using pose_filter_type = pose_filter_for<Measurement>;
-  static constexpr bool has_headings = localizes_headings<Measurement>;
+  /// `detail::no_pose_filter` without the (x, y, theta) filter (`Headings`).
+  using pose_filter_type =
+      std::conditional_t<has_headings, pose_filter_for<Measurement>, detail::no_pose_filter>;
 
   /// `map` is the photograph at `mm_per_px`; it is matched at the working resolution
   /// (`localizer_config::working_mm_per_px`: resampled when finer), positions in its own mm.
@@ -1372,6 +1423,13 @@ class basic_localizer {
       planar_.emplace(make_planar_filter(measurement_, config_, map_, mm_per_px_, window_));
     } else if constexpr (has_headings) {
       pose_.emplace(make_pose_filter(measurement_, config_, map_, mm_per_px_, window_));
+    } else if constexpr (localizes_headings<Measurement>) {
+      detail::fail("localizer: headings = ", config_.headings, ", but this localizer of ",
+                   detail::type_name<Measurement>(),
+                   " was compiled without the (x, y, theta) filter (heading_support::known, "
+                   "descriptor_localizer's default: it saves compiling that filter); use "
+                   "descriptor_localizer<D, tacmap::heading_support::localized> (or "
+                   "basic_localizer<P, tacmap::heading_support::localized>), or headings = 0");
     } else {
       detail::fail("localizer: headings = ", config_.headings, ", but the measurement policy ",
                    detail::type_name<Measurement>(),
@@ -1592,12 +1650,30 @@ class basic_localizer {
                    "frame's geometry");
     // Preprocess (and let the policy check the touch, P2) first: a malformed frame or a
     // descriptor that fails on it throws before anything changes.
-    const preprocessed_frame pre = preprocess(correction_.apply(frame), config_.preprocessing);
-    if constexpr (requires { measurement_.check_touch(config_, pre.pixels); })
-      if (pre.accepted()) measurement_.check_touch(config_, pre.pixels);
-    touch_result r = with_filter([&](auto& f) { return run(f, pre, moved); });
-    ++calls_;
-    return r;
+    // The self-calibration learns from every frame it sees: a refused touch must not teach it
+    // (the filter's half is made all or nothing by localizer_step).
+    std::optional<detail::sensor_correction> calibration_before;
+    if (correction_.estimate()) calibration_before = correction_;
+    try {
+      const preprocessed_frame pre = preprocess(correction_.apply(frame), config_.preprocessing);
+      if constexpr (requires { measurement_.check_touch(config_, pre.pixels); })
+        if (pre.accepted()) measurement_.check_touch(config_, pre.pixels);
+      touch_result r = with_filter([&](auto& f) { return run(f, pre, moved); });
+      ++calls_;
+      return r;
+    } catch (...) {
+      if (calibration_before) correction_ = std::move(*calibration_before);
+      throw;
+    }
+  }
+
+  // The saved filter state of localizer_step (one belief's storage, reused every touch).
+  template <class Filter>
+  typename Filter::saved_state& saved_state_for() {
+    if constexpr (std::is_same_v<Filter, planar_filter_type>)
+      return planar_saved_;
+    else
+      return pose_saved_;
   }
 
   template <class Filter>
@@ -1614,7 +1690,7 @@ class basic_localizer {
             filter.predict(odometry{.dx_mm = moved->du_mm, .dy_mm = moved->dv_mm});
         },
         pre.accepted() ? &pre.pixels : nullptr, config_.confidence, touches_, restarts_,
-        config_.slip_recheck);
+        saved_state_for<Filter>(), config_.slip_recheck);
     touch_result r;
     r.restarted = out.restarted;
     r.rejection = pre.rejection;
@@ -1672,6 +1748,8 @@ class basic_localizer {
   Measurement measurement_;
   std::optional<planar_filter_type> planar_;
   std::optional<pose_filter_type> pose_;
+  typename planar_filter_type::saved_state planar_saved_;
+  typename pose_filter_type::saved_state pose_saved_;
   std::size_t calls_ = 0;
   std::size_t touches_ = 0;
   std::size_t restarts_ = 0;
@@ -1688,12 +1766,15 @@ class localizer : public basic_localizer<configured_models> {
 };
 
 /// The front door for a descriptor of your own (`descriptor_measurement<D>`): every capability
-/// of `localizer`, C++ only.
+/// of `localizer`, C++ only. Known heading unless asked (`heading_support`): the (x, y, theta)
+/// filter is compiled in only with `heading_support::localized`.
 ///
 ///     tacmap::descriptor_localizer<my_descriptor> loc(map, 0.2);  // D{} by default
 ///     auto r = loc.touch(frame);
-template <descriptor D>
-using descriptor_localizer = basic_localizer<descriptor_measurement<D>>;
+///     tacmap::descriptor_localizer<my_descriptor, tacmap::heading_support::localized> turned(
+///         map, 0.2, {.headings = 36});
+template <descriptor D, heading_support Headings = heading_support::known>
+using descriptor_localizer = basic_localizer<descriptor_measurement<D>, Headings>;
 
 }  // namespace tacmap
 

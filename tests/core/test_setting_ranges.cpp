@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "tacmap/library_localizer.hpp"
 #include "tacmap/localizer.hpp"
 #include "test_support.hpp"
 
@@ -291,6 +292,53 @@ TEST_CASE("tactile_window names the scale range for a scale that makes the windo
   CHECK(message_of([] {
           (void)tacmap::tactile_window(tacmap::taxel_geometry{}, nan_value);
         }).find("mm_per_px = nan") != std::string::npos);
+}
+
+TEST_CASE("a map scale outside [1e-6, 1e3] mm per px is refused up front, naming the range") {
+  // The fuzz finding (fuzz/README.md, finding 5): a 6 x 6 array of 1e-160 mm taxels on a map of
+  // 1e-160 mm per px covers 6 px, so the window check passed; the robust motion's broad spread
+  // then came to 1e157 states, past Eigen::Index (undefined behaviour).
+  const tacmap::taxel_geometry tiny{.rows = 6, .cols = 6, .pitch_mm = 1e-160};
+  for (const double bad : {1e-160, 5e-7, 2e3}) {
+    CAPTURE(bad);
+    const tacmap::taxel_geometry sensor =
+        bad < 1.0 ? tiny : tacmap::taxel_geometry{.rows = 6, .cols = 6, .pitch_mm = 1e4};
+    const std::string m =
+        message_of([&] { tacmap::localizer loc(texture_map(), bad, {}, sensor); });
+    check_refused(m, "localizer: mm_per_px = ", "in [1e-06, 1000] mm per px");
+    CHECK(m.find("the map's scale") != std::string::npos);
+    check_refused(message_of([&] {
+                    tacmap::library_localizer lib({{"a", texture_map(), bad}}, {}, sensor);
+                  }),
+                  "mm_per_px = ", "in [1e-06, 1000] mm per px");
+  }
+  // The edges themselves build (a sensor whose footprint fits the 96 px map), each at the
+  // default working resolution of 3 px per taxel, so that the map is used as it is.
+  tacmap::localizer fine(texture_map(), 1e-6, {}, {.rows = 6, .cols = 6, .pitch_mm = 3e-6});
+  CHECK(fine.window().width == 18);
+  CHECK(fine.mm_per_px() == 1e-6);
+  tacmap::localizer coarse(texture_map(), 1e3, {}, {.rows = 6, .cols = 6, .pitch_mm = 3e3});
+  CHECK(coarse.window().width == 18);
+  CHECK(coarse.mm_per_px() == 1e3);
+}
+
+TEST_CASE("the robust motion's spreads in states are clamped on a grid of 1e-160 mm steps") {
+  // A grid built by hand may still have such a step: the wide and broad spreads (10 mm: 1e161
+  // states) are clamped before their conversion to Eigen::Index (UBSan flagged it), and a spread
+  // far beyond the grid is flat over it.
+  using grid_t = tacmap::planar_grid<float>;
+  const grid_t g({.width = 12, .height = 10}, 1e-160, {.width = 3, .height = 3});
+  Eigen::ArrayXf in = Eigen::ArrayXf::Zero(g.size());
+  in(g.size() / 2) = 1.0F;
+  tacmap::robust_motion<tacmap::odometry_gaussian> robust(
+      tacmap::odometry_gaussian({.sigma_mm = 1e-3}), {.lost_probability = 0.0,
+                                                      .wide_probability = 0.2,
+                                                      .wide_sigma_mm = 10.0,
+                                                      .broad_probability = 0.1,
+                                                      .broad_sigma_mm = 10.0});
+  Eigen::ArrayXf out(g.size());
+  (void)robust.predict(g, in, out, {.dx_mm = 0.0, .dy_mm = 0.0});
+  check_normalised(out / out.sum());
 }
 
 }  // namespace test_setting_ranges

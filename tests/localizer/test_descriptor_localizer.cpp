@@ -7,9 +7,11 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <type_traits>
 
 #include "../measurement/raw_patch_descriptor.hpp"
 #include "tacmap/descriptor/dense_sift.hpp"
@@ -167,6 +169,87 @@ TEST_CASE("a failing model propagates its error, never a silent restart; a polic
         }).find("has no (x, y, theta) model") != std::string::npos);
 }
 
+namespace {
+// Everything a refused touch must leave as it was: the filter's belief bit for bit, the counters.
+template <class Loc>
+struct localizer_state {
+  Eigen::ArrayXf belief;
+  std::size_t touches, restarts;
+  explicit localizer_state(const Loc& loc)
+      : belief(filter_belief(loc)), touches(loc.touches()), restarts(loc.restarts()) {}
+  static Eigen::ArrayXf filter_belief(const Loc& loc) {
+    if constexpr (requires { loc.planar_filter(); })
+      return loc.planar_filter()->belief();
+    else
+      return loc.filter().belief();
+  }
+  [[nodiscard]] bool same(const Loc& loc) const {
+    const Eigen::ArrayXf now = filter_belief(loc);
+    return now.size() == belief.size() && (now == belief).all() && loc.touches() == touches &&
+           loc.restarts() == restarts;
+  }
+};
+}  // namespace
+
+TEST_CASE("a touch whose update throws after its motion was applied changes nothing") {
+  // The fuzz finding: the model's +infinity (std::domain_error from the update) on a touch with
+  // motion left the prediction applied, and touch_at then applied the same motion again.
+  const float inf = std::numeric_limits<float>::infinity();
+  auto c = fast();
+  const tacmap::odometry right{.dx_mm = 3.4};
+  const tacmap::tactile_frame burst[] = {frame_at(3, 5), frame_at(3, 5)};
+  failing_policy p;
+  tacmap::basic_localizer<failing_policy> loc(test_map(), mm_per_px, c, {}, p);
+  loc.touch(frame_at(3, 4));
+  loc.touch(frame_at(3, 5), right);  // concentrated enough that a prediction shows
+  using state = localizer_state<tacmap::basic_localizer<failing_policy>>;
+  const state before(loc);
+  *p.model.value = inf;
+  CHECK_THROWS_AS(loc.touch(frame_at(3, 6), right), std::domain_error);
+  CHECK(before.same(loc));
+  CHECK_THROWS_AS(loc.touch(frame_at(3, 6), tacmap::sensor_odometry{.du_mm = 3.4}),
+                  std::domain_error);
+  CHECK(before.same(loc));
+  CHECK_THROWS_AS(loc.touch(std::span<const tacmap::tactile_frame>(burst), right),
+                  std::domain_error);
+  CHECK(before.same(loc));
+  // touch_at: the refused pose is not recorded, so the next touch_at's motion is counted once.
+  // Reference: the same touches with the refused call left out.
+  *p.model.value = 0.0F;
+  tacmap::basic_localizer<failing_policy> ref(test_map(), mm_per_px, c, {}, p);
+  for (auto* l : {&loc, &ref}) {
+    l->reset();
+    l->touch_at(frame_at(3, 4), {.x_mm = 10.0, .y_mm = 5.0});
+  }
+  *p.model.value = inf;
+  const state at_first(loc);
+  CHECK_THROWS_AS(loc.touch_at(frame_at(3, 5), {.x_mm = 13.4, .y_mm = 5.0}), std::domain_error);
+  CHECK(at_first.same(loc));
+  CHECK_THROWS_AS(
+      loc.touch_at(std::span<const tacmap::tactile_frame>(burst), {.x_mm = 13.4, .y_mm = 5.0}),
+      std::domain_error);
+  CHECK(at_first.same(loc));
+  *p.model.value = 0.0F;
+  loc.touch_at(frame_at(3, 6), {.x_mm = 16.8, .y_mm = 5.0});
+  ref.touch_at(frame_at(3, 6), {.x_mm = 16.8, .y_mm = 5.0});
+  CHECK((loc.planar_filter()->belief() == ref.planar_filter()->belief()).all());
+  CHECK(loc.touches() == 2);
+}
+
+TEST_CASE("a refused library touch changes nothing") {
+  const float inf = std::numeric_limits<float>::infinity();
+  failing_policy p;
+  tacmap::basic_library_localizer<failing_policy> lib(
+      {{"a", test_map(), mm_per_px}, {"b", test_map().colwise().reverse(), mm_per_px}}, fast(), {},
+      {}, {}, p);
+  lib.touch(frame_at(3, 4));
+  using state = localizer_state<tacmap::basic_library_localizer<failing_policy>>;
+  const state before(lib);
+  *p.model.value = inf;
+  CHECK_THROWS_AS(lib.touch(frame_at(3, 5), tacmap::odometry{.dx_mm = 3.4}), std::domain_error);
+  CHECK(before.same(lib));
+}
+
 TEST_CASE("a touch that rules out every predicted state restarts, counted; a uniform one cannot") {
   // -infinity outside a band of states the first touch confines the belief to, then a touch
   // allowed only far outside it: the documented contradiction.
@@ -258,7 +341,17 @@ TEST_CASE("the cost guard refuses a per-window preparation above the budget, wit
 TEST_CASE("a custom descriptor with unknown heading, and appearance = unsigned refused by name") {
   auto c = fast();
   c.headings = 4;
-  tacmap::descriptor_localizer<tacmap_test::raw_patch> loc(test_map(), mm_per_px, c);
+  // Planar unless asked (compile time): the refusal names the setting that compiles it in.
+  using planar_only = tacmap::descriptor_localizer<tacmap_test::raw_patch>;
+  static_assert(!planar_only::has_headings);
+  static_assert(std::is_same_v<planar_only::pose_filter_type, tacmap::detail::no_pose_filter>);
+  CHECK(tacmap_test::message_of([&] {
+          planar_only loc(test_map(), mm_per_px, c);
+        }).find("use descriptor_localizer<D, tacmap::heading_support::localized>") !=
+        std::string::npos);
+  static_assert(tacmap::localizer::has_headings);  // the default keeps both filters
+  tacmap::descriptor_localizer<tacmap_test::raw_patch, tacmap::heading_support::localized> loc(
+      test_map(), mm_per_px, c);
   REQUIRE(loc.pose_filter() != nullptr);
   const auto r = loc.touch(frame_at(3, 4));
   CHECK(r.accepted());

@@ -40,6 +40,13 @@ inline constexpr double max_tempering = 1e3;
 inline constexpr double min_epsilon = 1e-30;
 inline constexpr double max_epsilon = 1e30;
 
+/// A map's scale, mm per pixel: from a nanometre per pixel (an electron micrograph) to a metre
+/// (an aerial photograph). The grids' lattice step is this scale, and the motion models turn a
+/// spread in mm into whole states (sigma / step, an Eigen::Index): with every spread <= 1e6 mm
+/// and the step >= 1e-6 mm that is at most 1e12 states, where 1e-160 mm overflowed it.
+inline constexpr double min_mm_per_px = 1e-6;
+inline constexpr double max_mm_per_px = 1e3;
+
 /// Throws std::invalid_argument unless lo <= value <= hi (NaN fails): "<who>: <name> = <value>;
 /// expected <what> in [lo, hi] <unit> (<why>); <advice>".
 inline void check_range(const char* who, const char* name, double value, double lo, double hi,

@@ -281,6 +281,53 @@ class bayes_filter {
     }
   }
 
+ private:
+  // Tracking: after a tracked update, boxes on the belief image (every layer's states united)
+  // holding its support, and a bound on the mass outside them (what the next predict may leave
+  // in place); after a windowed predict (`moved`), the boxes where that mass now is, which the
+  // next tracked update searches instead of the whole grid. Empty once the belief changed any
+  // other way.
+  struct tracked_region {
+    std::vector<grid_box> boxes;  // pairwise disjoint
+    double outside = 0.0;
+    bool moved = false;
+  };
+
+ public:
+  /// What `predict`, `update` and `reset` change: the belief and tracking's bookkeeping (the
+  /// motion and measurement models keep no state between calls). `save_state` then
+  /// `restore_state` make a step of several calls all or nothing: the localizers save before
+  /// each touch and restore when any part of it throws (a touch with motion whose update then
+  /// fails must not leave the motion applied). One belief copy (a memcpy of `size()` values,
+  /// into `s`'s storage after the first save: no allocation).
+  class saved_state {
+    friend class bayes_filter;
+
+   public:
+    /// The belief as it was saved (e.g. before a touch's prediction).
+    const belief_type& belief() const noexcept { return belief_; }
+
+   private:
+    belief_type belief_;
+    std::optional<tracked_region> region_;
+    double reference_log_uniform_ = std::numeric_limits<double>::quiet_NaN();
+    int tracked_run_ = 0;
+  };
+  void save_state(saved_state& s) const {
+    s.belief_.resize(belief_.size());
+    s.belief_ = belief_;
+    s.region_ = region_;
+    s.reference_log_uniform_ = reference_log_uniform_;
+    s.tracked_run_ = tracked_run_;
+  }
+  /// Puts back what `save_state(s)` saved (`s` is left holding the discarded state).
+  void restore_state(saved_state& s) noexcept {
+    belief_.swap(s.belief_);
+    region_.swap(s.region_);
+    std::swap(reference_log_uniform_, s.reference_log_uniform_);
+    std::swap(tracked_run_, s.tracked_run_);
+  }
+
   /// Replaces the belief by a user prior: either a flat array of `size()` values or an image of
   /// `rows() x cols()` (single-layer grids). Values must be finite and >= 0 with a positive
   /// sum; they are normalised. Throws std::invalid_argument otherwise, belief unchanged.
@@ -537,16 +584,6 @@ class bayes_filter {
 
   // The tracked update (see tracking_params), or the reason it did not run (the caller then
   // updates the whole grid): update_path::tracked with the report filled, else the fallback.
-  // Tracking: after a tracked update, boxes on the belief image (every layer's states united)
-  // holding its support, and a bound on the mass outside them (what the next predict may leave
-  // in place); after a windowed predict (`moved`), the boxes where that mass now is, which the
-  // next tracked update searches instead of the whole grid. Empty once the belief changed any
-  // other way.
-  struct tracked_region {
-    std::vector<grid_box> boxes;  // pairwise disjoint
-    double outside = 0.0;
-    bool moved = false;
-  };
   // `region`: where a windowed predict left the mass (searched instead of the whole grid).
   update_path tracked_update(const measurement_type& z, update_report& report,
                              const tracked_region* region);

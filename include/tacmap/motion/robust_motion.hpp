@@ -298,10 +298,14 @@ class robust_motion {
  private:
   // Radius r of the box whose three passes have variance r (r + 1) closest to sigma^2 (px).
   static Eigen::Index box_radius(double sigma_px) {
+    // Clamped before the conversion (a grid of 1e-160 mm steps made it 1e160 states, beyond
+    // Eigen::Index); the front doors refuse such scales (detail::min_mm_per_px), a grid built
+    // by hand may still have one. 2^25 states is past any grid's side: the same blur.
     return std::max<Eigen::Index>(
-        1, static_cast<Eigen::Index>(
-               std::lround(0.5 * (std::sqrt(1.0 + 4.0 * sigma_px * sigma_px) - 1.0))));
+        1, static_cast<Eigen::Index>(std::lround(std::min(
+               0.5 * (std::sqrt(1.0 + 4.0 * sigma_px * sigma_px) - 1.0), max_states_per_axis))));
   }
+  static constexpr double max_states_per_axis = 33554432.0;  // 2^25
 
   // The broad component's density over one plane (`broad_`, rows x cols), from the position
   // marginal of `b` (its planes summed; `broad_mass_` each plane's mass, `broad_total_` their
@@ -321,6 +325,10 @@ class robust_motion {
     using scalar = typename Belief::Scalar;
     const Eigen::Index plane = rows * cols, layers = b.size() / plane;
     broad_mass_.assign(static_cast<std::size_t>(layers), 0.0);
+    // Spreads in states clamped as box_radius's (past any grid's side: flat over it either
+    // way), so that the blocks, their product and the Gaussian's reach stay finite integers.
+    sx = std::min(sx, max_states_per_axis);
+    sy = std::min(sy, max_states_per_axis);
     const auto block = [](double sigma) {
       return std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::floor(sigma / 2.0)));
     };

@@ -17,6 +17,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "tacmap/detail/setting_ranges.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/tactile/frame.hpp"
 
@@ -127,6 +128,9 @@ inline constexpr double max_tactile_window_px = 65536.0;
 [[nodiscard]] inline pixel_size checked_tactile_window(const taxel_geometry& geometry,
                                                        double mm_per_px, pixel_size map,
                                                        const char* who) {
+  detail::check_range(who, "mm_per_px", mm_per_px, detail::min_mm_per_px, detail::max_mm_per_px,
+                      " mm per px", "the map's scale",
+                      "give the photograph's scale in millimetres per pixel (e.g. 0.2)");
   const pixel_size w = tactile_window(geometry, mm_per_px);
   if (w.width < 1 || w.height < 1)
     detail::fail(who, ": a ", geometry.rows, " x ", geometry.cols, " array at ", geometry.pitch_mm,
