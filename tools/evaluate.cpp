@@ -627,16 +627,16 @@ int main(int argc, char** argv) try {
                "run every sequence again with the filter told about the faults (--fault-oracle "
                "told for outliers and a slip, the true --odometry-noise as its motion noise) and "
                "print the filter's figures against that ceiling");
-  bool no_slip_recheck = false;
-  app.add_flag("--no-slip-recheck", no_slip_recheck,
-               "the filter does not look again, as a slip, at a touch that doubts its prediction "
-               "(localizer_config::slip_recheck, on by default)");
+  bool slip_recheck = false;
+  app.add_flag("--slip-recheck", slip_recheck,
+               "the filter looks again, as a slip, at a touch that doubts its prediction "
+               "(localizer_config::slip_recheck, off by default)");
   tacmap::slip_recheck_params recheck;
   app.add_option("--slip-recheck-doubt", recheck.doubt,
-                 "the slip recheck: the touch's log prediction support below which it runs (-1)")
+                 "--slip-recheck: the touch's log prediction support below which it runs (-1)")
       ->check(CLI::Range(-1000.0, 0.0));
   app.add_option("--slip-recheck-broad", recheck.broad_probability,
-                 "the slip recheck: the slip hypothesis's share of the prediction (0.3)")
+                 "--slip-recheck: the slip hypothesis's share of the prediction (0.3)")
       ->check(CLI::Range(0.001, 0.9));
   app.add_flag("--random-orientation", random_orientation,
                "configurations with headings > 0: each sequence's sensor heading is drawn "
@@ -826,8 +826,7 @@ int main(int argc, char** argv) try {
     base.self_calibrate = self_calibrate >= 0;
     base.calibration_warmup = self_calibrate > 0 ? static_cast<std::size_t>(self_calibrate) : 0;
     if (tracking) base.tracking = tacmap::default_tracking();
-    base.slip_recheck = recheck;
-    if (no_slip_recheck) base.slip_recheck.reset();
+    if (slip_recheck) base.slip_recheck = recheck;
     if (kind == tacmap::measurement_kind::ncc) {
       for (const auto& t : tau_values) {
         auto c = base;

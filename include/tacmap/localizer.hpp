@@ -205,7 +205,11 @@ struct localizer_config {
   double broad_sigma_mm = 10.0;
   /// A touch that doubts its prediction is looked at again as a slip (`slip_recheck_params`):
   /// its update is done again from the belief before the move, predicted with a broad
-  /// component. Empty: off. Measured (tacmap-evaluate, realistic, 9 maps, seeds 1-3, 594
+  /// component. Empty (the default): off. Off by measurement: without faults it loses
+  /// sequences on photographs it was not tuned on (tacmap-evaluate, realistic, seed 1, 198
+  /// sequences each: held-out photographs 175 -> 169 localized, 172 with `doubt` -1.5; the
+  /// unknown-object scenario 168 -> 153, 156 with -1.5). Turn it on where objects slip in the
+  /// grasp. Measured (tacmap-evaluate, realistic, 9 maps, seeds 1-3, 594
   /// sequences; a 20 mm slip before touch 6 of 7): "localized" claims at touch 7 right 157 of
   /// 276 -> 254 of 319, sequences localized 78 -> 237, the claims' ECE 16-18 -> 7.5-9.7
   /// points; slips at touch 6 of 12 back below 5 mm within 5 touches 352 of 406 -> 367 of
@@ -214,7 +218,7 @@ struct localizer_config {
   /// and a second predict and update at a doubting touch (about 1 % of touches without
   /// faults). Needs `robust_motion` (the planar and pose filters; not a library's
   /// per-object motion, whose copies it cannot reach).
-  std::optional<slip_recheck_params> slip_recheck = slip_recheck_params{};
+  std::optional<slip_recheck_params> slip_recheck;
   /// The longest preparing a map may take, seconds (infinity: no limit). Applies where a
   /// descriptor's per-window features cost one `compute()` per window (no `describes_windows`
   /// hook, descriptor/concept.hpp H4: a user's descriptor, `appearance = unsigned`): the time is
