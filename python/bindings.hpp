@@ -202,6 +202,32 @@ void enum_property(PyClass& cls, const char* name, E Class::*member, choices<E> 
 
 // ---- keyword constructors and reprs for the parameter structs ----------------------------
 
+/// The keyword fields of LocalizerConfig (C++ localizer_config), in their documented order: one
+/// list for LocalizerConfig and for LocalizationConfig, which derives from it, so that a field
+/// bound on the first is a keyword of the second too.
+inline std::vector<std::string> localizer_config_fields() {
+  return {"model",
+          "pairs",
+          "shape",
+          "features",
+          "tau",
+          "tempering",
+          "motion_sigma_mm",
+          "motion_k",
+          "preprocessing",
+          "confidence",
+          "headings",
+          "turn_sigma_rad",
+          "prior_unknown",
+          "appearance",
+          "appearance_switch",
+          "lost_probability",
+          "wide_probability",
+          "wide_sigma_mm",
+          "broad_probability",
+          "broad_sigma_mm"};
+}
+
 /// Gives a bound parameter struct `T` (default-constructible, with a `validate()` that throws
 /// std::invalid_argument) a constructor taking any of `fields` as keywords — each set through
 /// its property, so enum names and types are checked as on assignment — then validated; a

@@ -277,27 +277,7 @@ void bind_config(py::module_& m) {
            "A short name for tables: 'sift_lite/all_pairs/inverse/per_window', with "
            "'/tau=0.5' when tau is set, and so on.");
   keyword_struct<localizer_config>(
-      cfg,
-      {"model",
-       "pairs",
-       "shape",
-       "features",
-       "tau",
-       "tempering",
-       "motion_sigma_mm",
-       "motion_k",
-       "preprocessing",
-       "confidence",
-       "headings",
-       "turn_sigma_rad",
-       "prior_unknown",
-       "appearance",
-       "appearance_switch",
-       "lost_probability",
-       "wide_probability",
-       "wide_sigma_mm",
-       "broad_probability",
-       "broad_sigma_mm"},
+      cfg, localizer_config_fields(),
       "Everything that configures the filter a Localizer (or a simulated experiment) runs (C++ "
       "tacmap::localizer_config): the measurement model, the motion model, the latent "
       "appearance, preprocessing and the verdict. The defaults are the best measured (README, "

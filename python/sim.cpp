@@ -415,30 +415,11 @@ void bind_simulation(py::module_& m) {
                      "Each sequence's sensor heading drawn uniformly from [-pi, pi) instead of "
                      "0; the odometry is then reported in the sensor's frame (use with "
                      "headings > 0).");
+  std::vector<std::string> experiment_fields = localizer_config_fields();
+  for (const char* f : {"simulator_seed", "simulator", "scenario", "faults", "random_orientation"})
+    experiment_fields.emplace_back(f);
   keyword_struct<localization_config>(
-      lc,
-      {"model",
-       "pairs",
-       "shape",
-       "features",
-       "tau",
-       "tempering",
-       "motion_sigma_mm",
-       "motion_k",
-       "preprocessing",
-       "confidence",
-       "headings",
-       "turn_sigma_rad",
-       "appearance",
-       "appearance_switch",
-       "lost_probability",
-       "wide_probability",
-       "wide_sigma_mm",
-       "simulator_seed",
-       "simulator",
-       "scenario",
-       "faults",
-       "random_orientation"},
+      lc, std::move(experiment_fields),
       "Everything that configures one simulated localization run (C++ "
       "tacmap::localization_config): the filter (the LocalizerConfig fields, same defaults) "
       "and the simulated world around it.");
