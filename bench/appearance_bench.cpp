@@ -18,6 +18,8 @@
 namespace {
 
 using tacmap_bench::bench_map;
+using tacmap_bench::frame_at;
+using tacmap_bench::time_localizer_touches;
 using tacmap_bench::time_touches;
 using planar = tacmap::planar_grid<float>;
 using pose = tacmap::pose_grid<float>;
@@ -48,18 +50,6 @@ void planar_touch_latent(benchmark::State& state, bool both_signs) {
 }
 BENCHMARK_CAPTURE(planar_touch_latent, one_pass, true)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(planar_touch_latent, pass_per_hypothesis, false)->Unit(benchmark::kMicrosecond);
-
-// The front door: one `localizer::touch` with its defaults (the model above, one pass, plus the
-// motion floor, preprocessing a raw 14 x 6 frame, the estimate and `assess`'s verdict) against
-// planar_touch_latent/one_pass, the bare filter's predict + update.
-tacmap::tactile_frame frame_at(const tacmap::image<float>& map, Eigen::Index row,
-                               Eigen::Index col) {
-  tacmap::tactile_frame f;
-  for (Eigen::Index r = 0; r < 14; ++r)
-    for (Eigen::Index c = 0; c < 6; ++c)
-      f.counts(r, c) = 300.0F + 3000.0F * map.block(row + 3 * r, col + 3 * c, 3, 3).mean();
-  return f;
-}
 
 // `config`'s planar filter on the bench map, touches alternating between two places.
 void time_planar_filter(benchmark::State& state, const tacmap::localizer_config& config) {
@@ -95,19 +85,13 @@ void planar_touch_default_filter_broad(benchmark::State& state) {
 }
 BENCHMARK(planar_touch_default_filter_broad)->Unit(benchmark::kMicrosecond);
 
+// The front door: one `localizer::touch` with its defaults (the model above, one pass, plus the
+// motion floor, preprocessing a raw 14 x 6 frame, the estimate and `assess`'s verdict) against
+// planar_touch_latent/one_pass, the bare filter's predict + update.
 void planar_touch_localizer(benchmark::State& state) {
   const auto map = bench_map();
   tacmap::localizer loc(map, 3.4 / 3.0);
-  const auto a = frame_at(map, 30, 40), b = frame_at(map, 30, 44);
-  const tacmap::odometry there{.dx_mm = 4.5, .dy_mm = 0.0};
-  const tacmap::odometry back{.dx_mm = -there.dx_mm, .dy_mm = 0.0};
-  loc.touch(a);
-  bool at_a = true;
-  for (auto _ : state) {
-    const auto r = loc.touch(at_a ? b : a, at_a ? there : back);
-    at_a = !at_a;
-    benchmark::DoNotOptimize(r.position_mm.data());
-  }
+  time_localizer_touches(state, loc, map);
 }
 BENCHMARK(planar_touch_localizer)->Unit(benchmark::kMicrosecond);
 

@@ -14,15 +14,8 @@
 namespace {
 
 using tacmap_bench::bench_map;
-
-tacmap::tactile_frame frame_at(const tacmap::image<float>& map, Eigen::Index row,
-                               Eigen::Index col) {
-  tacmap::tactile_frame f;
-  for (Eigen::Index r = 0; r < 14; ++r)
-    for (Eigen::Index c = 0; c < 6; ++c)
-      f.counts(r, c) = 300.0F + 3000.0F * map.block(row + 3 * r, col + 3 * c, 3, 3).mean();
-  return f;
-}
+using tacmap_bench::frame_at;
+using tacmap_bench::time_localizer_touches;
 
 // 100 moves: a 10 x 10 lattice of +-40 mm.
 std::vector<tacmap::odometry> hundred_moves() {
@@ -74,16 +67,7 @@ BENCHMARK(next_touch_100_uniform_k128)->Unit(benchmark::kMillisecond);
 void localizer_touch(benchmark::State& state) {
   const auto map = bench_map();
   tacmap::localizer loc(map, 3.4 / 3.0);
-  const auto a = frame_at(map, 30, 40), b = frame_at(map, 30, 44);
-  const tacmap::odometry there{.dx_mm = 4.5, .dy_mm = 0.0};
-  const tacmap::odometry back{.dx_mm = -there.dx_mm, .dy_mm = 0.0};
-  (void)loc.touch(a);
-  bool at_a = true;
-  for (auto _ : state) {
-    const auto r = loc.touch(at_a ? b : a, at_a ? there : back);
-    at_a = !at_a;
-    benchmark::DoNotOptimize(r.position_mm.data());
-  }
+  time_localizer_touches(state, loc, map);
 }
 BENCHMARK(localizer_touch)->Unit(benchmark::kMillisecond);
 
