@@ -520,9 +520,7 @@ inline constexpr const char* coarse_photo_cost =
   sensor.validate();
   // The scale's own range first (as checked_tactile_window does later): a scale outside it is
   // the input's fault, whatever the sensor.
-  detail::check_range(who.c_str(), "mm_per_px", photo_mm_per_px, detail::min_mm_per_px,
-                      detail::max_mm_per_px, " mm per px", "the map's scale",
-                      "give the photograph's scale in millimetres per pixel (e.g. 0.2)");
+  check_map_scale(who.c_str(), photo_mm_per_px);
   const double pitch = sensor.pitch_mm;
   const double coarsest = pitch / localizer_config::min_px_per_taxel;
   constexpr double slack = 1e-9;  // 3.4 / 3 given as 1.1333 is the same scale

@@ -122,15 +122,22 @@ inline constexpr double max_tactile_window_px = 65536.0;
   return {.width = side(geometry.cols), .height = side(geometry.rows)};
 }
 
+namespace detail {
+/// A map's scale against the range in which the models stay finite ([min_mm_per_px,
+/// max_mm_per_px]), refused naming the value and the range (messages start with `who`).
+inline void check_map_scale(const char* who, double mm_per_px) {
+  check_range(who, "mm_per_px", mm_per_px, min_mm_per_px, max_mm_per_px, " mm per px",
+              "the map's scale", "give the photograph's scale in millimetres per pixel (e.g. 0.2)");
+}
+}  // namespace detail
+
 /// `tactile_window`, checked against the map it must fit on: throws std::invalid_argument
 /// (messages start with `who`) when the array covers less than a pixel or the map is smaller
 /// than the sensor's footprint.
 [[nodiscard]] inline pixel_size checked_tactile_window(const taxel_geometry& geometry,
                                                        double mm_per_px, pixel_size map,
                                                        const char* who) {
-  detail::check_range(who, "mm_per_px", mm_per_px, detail::min_mm_per_px, detail::max_mm_per_px,
-                      " mm per px", "the map's scale",
-                      "give the photograph's scale in millimetres per pixel (e.g. 0.2)");
+  detail::check_map_scale(who, mm_per_px);
   const pixel_size w = tactile_window(geometry, mm_per_px);
   if (w.width < 1 || w.height < 1)
     detail::fail(who, ": a ", geometry.rows, " x ", geometry.cols, " array at ", geometry.pitch_mm,
