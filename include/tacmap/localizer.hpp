@@ -272,7 +272,10 @@ struct localizer_config {
   /// The working resolution for `sensor` (mm per px): `working_mm_per_px`, else the pitch /
   /// `default_px_per_taxel`.
   [[nodiscard]] double working_scale(const taxel_geometry& sensor) const {
-    return working_mm_per_px.value_or(sensor.pitch_mm / default_px_per_taxel);
+    // The default never leaves the range the models stay finite in (a pitch above 3 m): the
+    // photograph's own scale is the one checked and named, not a derived one.
+    return working_mm_per_px.value_or(
+        std::min(sensor.pitch_mm / default_px_per_taxel, detail::max_mm_per_px));
   }
   [[nodiscard]] double broad() const {
     return broad_probability.value_or(default_broad_probability);
@@ -372,10 +375,10 @@ struct localizer_config {
     burst.validate();
     if (calibrate_sensor) calibrate_sensor->validate();
     if (tracking) tracking->validate();
-    if (working_mm_per_px && !(std::isfinite(*working_mm_per_px) && *working_mm_per_px > 0.0))
-      detail::fail("localizer_config: working_mm_per_px = ", *working_mm_per_px,
-                   "; expected the scale to match at, a finite value > 0 mm per px (empty: the "
-                   "sensor's pitch / 3)");
+    if (working_mm_per_px)
+      detail::check_range("localizer_config", "working_mm_per_px", *working_mm_per_px,
+                          detail::min_mm_per_px, detail::max_mm_per_px, " mm per px",
+                          "the scale to match at", "leave it empty for the sensor's pitch / 3");
     {
       preprocess_params p = preprocessing;  // mm_per_px is replaced by the map's
       p.mm_per_px = 1.0;

@@ -191,6 +191,22 @@ TEST_CASE("working resolution: fewer than 2 px per taxel is refused, naming the 
   config.working_mm_per_px = -1.0;
   CHECK(tacmap_test::message_of([&] { config.validate(); }).find("working_mm_per_px = -1") !=
         std::string::npos);
+  // A setting outside the scales the models stay finite at is refused with the range.
+  config.working_mm_per_px = 2e3;
+  const std::string range = tacmap_test::message_of([&] { config.validate(); });
+  CHECK(range.find("working_mm_per_px = 2000") != std::string::npos);
+  CHECK(range.find("in [1e-06, 1000]") != std::string::npos);
+  // A sensor whose default working scale (pitch / 3) would leave that range: the default stops
+  // at its end, so a valid photograph builds and is matched at 1000 mm per px.
+  const tacmap::taxel_geometry giant{.rows = 14, .cols = 6, .pitch_mm = 3600.0};
+  CHECK(tacmap::localizer_config{}.working_scale(giant) == 1e3);
+  const tacmap::image<float> field = blobs(120.0, 90.0, 1.0, 7);
+  tacmap::localizer_config ncc;
+  ncc.model = tacmap::measurement_kind::ncc;
+  const double km = 800.0;  // the same 120 x 90 px photograph as a 96 x 72 km field
+  const tacmap::localizer huge(field, km, ncc, giant);
+  CHECK(huge.mm_per_px() == doctest::Approx(1e3).epsilon(0.01));
+  CHECK(huge.photo_mm_per_px() == km);
   // The library refuses such a map by name.
   const std::vector<tacmap::library_map> maps{{"board", photo, 2.0}};
   const std::string library = tacmap_test::message_of([&] { tacmap::library_localizer loc(maps); });
