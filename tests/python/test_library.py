@@ -221,6 +221,21 @@ class TestLibraryLocalizer(unittest.TestCase):
             lib.object_extent_mm(1.5)
         self.assertEqual(lib.object_extent_mm(np.int64(1)), lib.object_extent_mm("blobs"))
 
+    def test_restarts_are_counted_by_both_front_doors(self):
+        # Without the motion floor, a move off the map carries every state away: the filter
+        # starts again from uniform, says so in the result and counts it.
+        p = gecko()
+        cfg = fast_config(lost_probability=0.0, wide_probability=0.0)
+        frame = simulator(39).render(*p.locations[0])
+        for front_door in (tacmap.Localizer(p.map, p.mm_per_px, cfg),
+                           tacmap.LibraryLocalizer([("gecko", p.map, p.mm_per_px)], cfg)):
+            self.assertFalse(front_door.touch(frame).restarted)
+            self.assertEqual(front_door.restarts, 0)
+            self.assertTrue(front_door.touch(frame, (200.0, 0.0)).restarted)
+            self.assertEqual(front_door.restarts, 1)
+            front_door.reset()
+            self.assertEqual(front_door.restarts, 0)
+
 
 class TestLibraryBadInput(unittest.TestCase):
     """A bad library is refused with a message naming the entry and what was expected."""
