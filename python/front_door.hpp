@@ -128,6 +128,17 @@ inline std::vector<odometry> candidates_of(const py::object& candidates, const s
   return moves;
 }
 
+/// Moves as a new (N, 2) numpy array of (dx_mm, dy_mm).
+inline py::array_t<double> moves_to_numpy(const std::vector<odometry>& moves) {
+  py::array_t<double> out({static_cast<py::ssize_t>(moves.size()), py::ssize_t{2}});
+  auto a = out.mutable_unchecked<2>();
+  for (py::ssize_t i = 0; i < a.shape(0); ++i) {
+    a(i, 0) = moves[static_cast<std::size_t>(i)].dx_mm;
+    a(i, 1) = moves[static_cast<std::size_t>(i)].dy_mm;
+  }
+  return out;
+}
+
 /// next_touch's keyword arguments as C++ parameters.
 inline next_touch_params next_touch_params_of(int hypotheses, const std::string& objective,
                                               const std::string& what) {

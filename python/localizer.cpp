@@ -540,6 +540,10 @@ void bind_localizer(py::module_& m) {
           },
           "Each candidate's probability, under the belief, that the sensor lands on the map.")
       .def_property_readonly(
+          "candidates", [](const next_touch_ranking& r) { return moves_to_numpy(r.candidates); },
+          "The moves ranked, in input order (numpy float64 (N, 2), (dx_mm, dy_mm) each): "
+          "candidates[order[0]] is the best.")
+      .def_property_readonly(
           "best", [](const next_touch_ranking& r) { return r.best(); },
           "The index of the best candidate (order[0]).")
       .def_readonly("uninformative", &next_touch_ranking::uninformative,
@@ -554,6 +558,24 @@ void bind_localizer(py::module_& m) {
                ", candidates=" + std::to_string(r.score.size()) +
                ", uninformative=" + (r.uninformative ? "True" : "False") + ")";
       });
+
+  m.def(
+      "touch_region",
+      [](double x_min_mm, double x_max_mm, double y_min_mm, double y_max_mm, double step_mm) {
+        return moves_to_numpy(touch_region{.x_min_mm = x_min_mm,
+                                           .x_max_mm = x_max_mm,
+                                           .y_min_mm = y_min_mm,
+                                           .y_max_mm = y_max_mm,
+                                           .step_mm = step_mm}
+                                  .candidates());
+      },
+      py::arg("x_min_mm"), py::arg("x_max_mm"), py::arg("y_min_mm"), py::arg("y_max_mm"),
+      py::arg("step_mm") = 1.0,
+      "The moves of a reachable rectangle (C++ tacmap::touch_region::candidates()): a lattice "
+      "of step_mm from (x_min_mm, y_min_mm) to (x_max_mm, y_max_mm), relative to where the "
+      "sensor is now, as an (N, 2) float64 array of (dx_mm, dy_mm), x fastest — the "
+      "candidates of next_touch. Raises ValueError for a rectangle that is not finite or "
+      "inverted, a step that is not a finite positive number, or more than a million points.");
 
   // ---- Localizer ----
   py::class_<py_localizer>(m, "Localizer", localizer_doc)

@@ -182,6 +182,21 @@ class TestLibraryLocalizer(unittest.TestCase):
         self.assertTrue(np.all((v.score >= 0.0) & (v.score <= 1.0 + 1e-9)))
         self.assertFalse(np.allclose(v.score, lib.next_touch(moves, hypotheses=32,
                                                              objective="entropy").score))
+        # A reachable rectangle gives the same lattice (x fastest); the ranking keeps its moves.
+        region = tacmap.touch_region(-20.0, 20.0, -20.0, 20.0, step_mm=10.0)
+        np.testing.assert_array_equal(region, moves)
+        ranked = lib.next_touch(region, objective="entropy")
+        np.testing.assert_array_equal(ranked.candidates, region)
+        np.testing.assert_array_equal(ranked.score, r.score)
+        loc = tacmap.Localizer(p.map, p.mm_per_px, fast_config())
+        loc.touch(simulator(33).render(*p.locations[0]))
+        np.testing.assert_array_equal(loc.next_touch(region).candidates, region)
+        with self.assertRaisesRegex(ValueError, "expected min <= max"):
+            tacmap.touch_region(1.0, -1.0, 0.0, 1.0)
+        with self.assertRaisesRegex(ValueError, "step_mm = 0"):
+            tacmap.touch_region(0.0, 1.0, 0.0, 1.0, step_mm=0.0)
+        with self.assertRaisesRegex(ValueError, "not finite"):
+            tacmap.touch_region(0.0, math.inf, 0.0, 1.0)
         for k in range(2):
             np.testing.assert_array_equal(lib.object_belief(k), before[k])
         with self.assertRaisesRegex(ValueError, "candidate 1 moves .* not finite"):
