@@ -10,6 +10,7 @@ field keep each class to seconds.
 """
 
 import math
+import threading
 import unittest
 
 import numpy as np
@@ -250,6 +251,41 @@ class TestLibraryLocalizer(unittest.TestCase):
             self.assertEqual(front_door.restarts, 1)
             front_door.reset()
             self.assertEqual(front_door.restarts, 0)
+
+
+class TestLibraryThreads(unittest.TestCase):
+    def test_maps_prepared_in_parallel_and_one_library_shared(self):
+        # Preparing the maps on two threads gives the same library (the same touches give the
+        # same posteriors); one library shared by two Python threads serialises their touches.
+        p = gecko()
+        maps = [("gecko", p.map, p.mm_per_px), ("blobs", blobs(p.map.shape, 12), p.mm_per_px),
+                ("horse", tacmap.read_pgm(test_tacmap.DATA + "/horse/horse.pgm"), p.mm_per_px)]
+        one = tacmap.LibraryLocalizer(maps, fast_config())
+        two = tacmap.LibraryLocalizer(maps, fast_config(), threads=2)
+        a, _ = library_sequence(one, simulator(40), 3)
+        b, _ = library_sequence(two, simulator(40), 3)
+        for x, y in zip(a, b):
+            np.testing.assert_array_equal(x.object_probability, y.object_probability)
+            np.testing.assert_array_equal(x.position_mm, y.position_mm)
+        frame = simulator(41).render(*p.locations[1])
+        errors = []
+
+        def touch_many():
+            try:
+                for _ in range(10):
+                    r = two.touch(frame, (0.0, 0.0))
+                    check_sums(self, r)
+            except Exception as e:  # noqa: BLE001 (reported below)
+                errors.append(e)
+
+        two.reset()
+        threads = [threading.Thread(target=touch_many) for _ in range(2)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        self.assertEqual(errors, [])
+        self.assertEqual(two.touches, 20)
 
 
 class TestLibraryBadInput(unittest.TestCase):
