@@ -45,6 +45,7 @@ namespace py = pybind11;
 void bind_core(py::module_& m);         // TaxelGeometry, Frame, Pose, MapCalibration (core.cpp)
 void bind_config(py::module_& m);       // LocalizerConfig and its parts (localizer.cpp)
 void bind_localizer(py::module_& m);    // Localizer, TouchResult (localizer.cpp)
+void bind_library(py::module_& m);      // LibraryLocalizer, LibraryTouchResult (library.cpp)
 void bind_simulation(py::module_& m);   // Simulator, scenarios, protocol, experiment (sim.cpp)
 void bind_io(py::module_& m);           // session logs, image files (io.cpp)
 void bind_descriptors(py::module_& m);  // SiftLite, ClassicSift (descriptor.cpp)
@@ -225,7 +226,46 @@ inline std::vector<std::string> localizer_config_fields() {
           "wide_probability",
           "wide_sigma_mm",
           "broad_probability",
-          "broad_sigma_mm"};
+          "broad_sigma_mm",
+          "slip_recheck",
+          "burst",
+          "calibrate_sensor",
+          "tracking",
+          "working_mm_per_px"};
+}
+
+/// A read-write property `name` of `Class` for an optional parameter struct `P` (a bound
+/// class): None when off. Reading gives a view into the configuration (as for its other nested
+/// parameters: `config.tracking.epsilon = 1e-8` changes the configuration), or None. Assigning
+/// takes None or False (off), True (`on`, the values turning it on means) or a `P`; anything
+/// else is a TypeError naming the value.
+template <class Class, class P, class PyClass>
+void optional_params_property(PyClass& cls, const char* name, std::optional<P> Class::*member, P on,
+                              const char* doc) {
+  const std::string what = std::string(py::str(cls.attr("__name__"))) + "." + name;
+  const std::string type_name = py::str(py::type::of<P>().attr("__name__"));
+  const std::string full_doc = std::string(doc) + "\n\nNone, True or a " + type_name +
+                               " (assign None or False to turn it off).";
+  cls.def_property(
+      name,
+      [member](py::object self) -> py::object {
+        Class& c = self.cast<Class&>();
+        if (!(c.*member)) return py::none();
+        return py::cast(&*(c.*member), py::return_value_policy::reference_internal, self);
+      },
+      [member, on, what, type_name](Class& c, const py::object& value) {
+        if (value.is_none() || (py::isinstance<py::bool_>(value) && !value.cast<bool>()))
+          c.*member = std::nullopt;
+        else if (py::isinstance<py::bool_>(value))
+          c.*member = on;
+        else if (py::isinstance<P>(value))
+          c.*member = value.cast<P>();
+        else
+          throw py::type_error(what + " = " + std::string(py::repr(value)) + " (a " +
+                               std::string(py::str(py::type::of(value).attr("__name__"))) +
+                               "); expected None (off), True (the defaults) or a " + type_name);
+      },
+      full_doc.c_str());
 }
 
 /// Gives a bound parameter struct `T` (default-constructible, with a `validate()` that throws

@@ -2,7 +2,6 @@
 // returns (C++ include/tacmap/localizer.hpp).
 #include "bindings.hpp"
 // (bindings.hpp first: it defines TACMAP_ASSERT for the tacmap headers below.)
-
 #include <array>
 #include <cstdint>
 #include <mutex>
@@ -10,6 +9,7 @@
 #include <variant>
 #include <vector>
 
+#include "front_door.hpp"
 #include "tacmap/localizer.hpp"
 #include "tacmap/tactile/preprocess.hpp"
 
@@ -33,80 +33,17 @@ const choices<appearance_handling> appearance_names_ = {
     {"latent", appearance_handling::latent},
     {"unsigned", appearance_handling::unsigned_gradients},
     {"per_patch", appearance_handling::per_patch}};
+const choices<burst_statistic> burst_statistic_names = {
+    {"median", burst_statistic::median}, {"trimmed_mean", burst_statistic::trimmed_mean}};
 const choices<resize_method> resize_names = {{"bilinear", resize_method::bilinear},
                                              {"nearest", resize_method::nearest}};
-const choices<frame_rejection> rejection_names = {{"none", frame_rejection::none},
-                                                  {"weak_peak", frame_rejection::weak_peak},
-                                                  {"weak_total", frame_rejection::weak_total},
-                                                  {"flat", frame_rejection::flat}};
-
-std::string number(double v) { return py::repr(py::float_(v)); }
 
 // ---- Localizer: the C++ object and the lock that makes it safe to share between threads ----
 
-// A localizer and a mutex. The C++ localizer is not thread-safe; the Python one releases the GIL
-// during touches, so two Python threads could otherwise run one localizer at once. Every method
-// takes the mutex with the GIL released (never the other way round, so no deadlock).
-struct py_localizer {
-  py_localizer(image<float> map, double mm_per_px, localizer_config config, taxel_geometry sensor)
-      : impl(std::move(map), mm_per_px, std::move(config), sensor) {}
-  localizer impl;
-  std::mutex mutex;
-};
+using py_localizer = locked_front_door<localizer>;
 
-// Runs f(localizer) with the GIL released and the localizer's lock held. f must not touch
-// Python objects.
-template <class F>
-auto locked(py_localizer& self, F&& f) {
-  py::gil_scoped_release release;
-  const std::lock_guard<std::mutex> lock(self.mutex);
-  return f(self.impl);
-}
-
-std::string sensor_shape(const taxel_geometry& s) {
-  return "(" + std::to_string(s.rows) + ", " + std::to_string(s.cols) + ") (the localizer's " +
-         "sensor: " + std::to_string(s.rows) + " x " + std::to_string(s.cols) + " taxels)";
-}
-
-// A Frame (copied: another thread may write to its counts while the GIL is released) or a 2-D
-// array of counts for the localizer's sensor.
-tactile_frame frame_of(const localizer& loc, const py::object& obj, const std::string& what) {
-  if (py::isinstance<tactile_frame>(obj)) return obj.cast<tactile_frame>();
-  tactile_frame f;
-  f.geometry = loc.sensor();
-  f.counts = to_image(obj, what, sensor_shape(loc.sensor()), loc.sensor().rows, loc.sensor().cols);
-  return f;
-}
-
-using motion = std::variant<std::monostate, odometry, sensor_odometry>;
-
-// None, (dx_mm, dy_mm) in the map's frame or (du_mm, dv_mm, dtheta_rad) in the sensor's.
-motion motion_of(const py::object& moved, const std::string& what) {
-  if (moved.is_none()) return {};
-  const std::string expected =
-      "None (no motion since the previous touch), (dx_mm, dy_mm) in the map's frame or "
-      "(du_mm, dv_mm, dtheta_rad) in the sensor's";
-  if (py::isinstance<py::str>(moved) || PySequence_Check(moved.ptr()) == 0)
-    throw py::type_error(what + ": got " +
-                         std::string(py::str(py::type::of(moved).attr("__name__"))) +
-                         "; expected " + expected);
-  const auto seq = py::reinterpret_borrow<py::sequence>(moved);
-  const auto n = py::len(seq);
-  if (n != 2 && n != 3)
-    throw py::value_error(what + ": " + std::to_string(n) + " values (" +
-                          std::string(py::repr(moved)) + "); expected " + expected);
-  std::array<double, 3> v{};
-  for (std::size_t k = 0; k < n; ++k) {
-    try {
-      v[k] = py::float_(seq[k]);
-    } catch (py::error_already_set&) {
-      throw py::type_error(what + ": element " + std::to_string(k) + " = " +
-                           std::string(py::repr(seq[k])) + " is not a number; expected " +
-                           expected);
-    }
-  }
-  if (n == 2) return odometry{.dx_mm = v[0], .dy_mm = v[1]};
-  return sensor_odometry{.du_mm = v[0], .dv_mm = v[1], .dtheta_rad = v[2]};
+tactile_frame frame_of(const localizer& loc, const py::handle& obj, const std::string& what) {
+  return python::frame_of(loc.sensor(), obj, what, "localizer");
 }
 
 py::tuple extent_of(const localizer& loc) {
@@ -189,6 +126,109 @@ void bind_config(py::module_& m) {
       "probability that the estimate lies within radius_mm of the truth, against a threshold; "
       "and when a touch contradicts the prediction.");
 
+  // ---- BurstParams ----
+  py::class_<burst_params> bp(m, "BurstParams");
+  bp.def_readwrite("settle_tolerance", &burst_params::settle_tolerance,
+                   "A frame belongs to the settled press once its total is within this fraction "
+                   "of the settled level; the frames before the first such frame are the "
+                   "settling head.")
+      .def_readwrite("outlier_tolerance", &burst_params::outlier_tolerance,
+                     "After the head, frames whose total differs from the settled level by more "
+                     "than this fraction are outliers (at least settle_tolerance).")
+      .def_readwrite("trim_fraction", &burst_params::trim_fraction,
+                     "'trimmed_mean': the fraction of the values dropped at each end, [0, 0.5).")
+      .def_readwrite("min_total", &burst_params::min_total,
+                     "Totals below this (counts) count as no load.");
+  enum_property(bp, "statistic", &burst_params::statistic, burst_statistic_names,
+                "How the frames kept are combined per taxel: 'median' (robust to single "
+                "spikes) or 'trimmed_mean'.");
+  keyword_struct<burst_params>(
+      bp, {"settle_tolerance", "outlier_tolerance", "statistic", "trim_fraction", "min_total"},
+      "How a press read as a burst of frames is combined into one (C++ tacmap::burst_params, "
+      "tactile/burst.hpp): Localizer.touch_burst and LibraryLocalizer.touch_burst with "
+      "LocalizerConfig.burst, or combine_burst alone.");
+
+  // ---- SelfCalibrationParams ----
+  py::class_<self_calibration_params> sc(m, "SelfCalibrationParams");
+  sc.def_readwrite("window", &self_calibration_params::window,
+                   "Touches kept for the estimate (the most recent).")
+      .def_readwrite("min_touches", &self_calibration_params::min_touches,
+                     "Touches loading a taxel's neighbourhood needed to call it dead or stuck, "
+                     "and quiet touches needed to estimate its offset.")
+      .def_readwrite("min_gain_touches", &self_calibration_params::min_gain_touches,
+                     "Even-enough touches a taxel needs before its gain is estimated.")
+      .def_readwrite("load_fraction", &self_calibration_params::load_fraction,
+                     "Neighbours' mean >= this x peak: a gain observation.")
+      .def_readwrite("unloaded_fraction", &self_calibration_params::unloaded_fraction,
+                     "Every neighbour below this x peak: an offset observation.")
+      .def_readwrite("dead_fraction", &self_calibration_params::dead_fraction,
+                     "Gain (or median reading ratio) below this: dead.")
+      .def_readwrite("stuck_fraction", &self_calibration_params::stuck_fraction,
+                     "Reading spread below this x the neighbours' spread: stuck.")
+      .def_readwrite("gain_tolerance", &self_calibration_params::gain_tolerance,
+                     "Gains within this of 1 are left at 1.")
+      .def_readwrite("min_peak", &self_calibration_params::min_peak,
+                     "Touches whose peak is below this (counts) are not used (no contact).")
+      .def_readwrite("iterations", &self_calibration_params::iterations,
+                     "Fixed-point iterations of the gains.")
+      .def_readwrite("refresh_every", &self_calibration_params::refresh_every,
+                     "The estimate is redone every this many usable touches.");
+  keyword_struct<self_calibration_params>(
+      sc,
+      {"window", "min_touches", "min_gain_touches", "load_fraction", "unloaded_fraction",
+       "dead_fraction", "stuck_fraction", "gain_tolerance", "min_peak", "iterations",
+       "refresh_every"},
+      "A sensor that calibrates itself from its own touches (C++ "
+      "tacmap::self_calibration_params, tactile/self_calibration.hpp): per-taxel gain and "
+      "offset, dead and stuck taxels (which never vote), with no calibration rig. "
+      "LocalizerConfig.calibrate_sensor turns it on.");
+
+  // ---- TrackingParams ----
+  py::class_<tracking_params> tp(m, "TrackingParams");
+  tp.def_readwrite("epsilon", &tracking_params::epsilon,
+                   "Predicted mass left outside the evaluated states, [0, 0.5); 0 turns "
+                   "tracking off. 1e-9 for real touches.")
+      .def_readwrite("tolerance", &tracking_params::tolerance,
+                     "The largest bound on the posterior's total-variation error accepted on "
+                     "the tracked path, (0, 1).")
+      .def_readwrite("max_support", &tracking_params::max_support,
+                     "The whole grid is evaluated when the support holds more than this "
+                     "fraction of the states, (0, 1].")
+      .def_readwrite("recheck_every", &tracking_params::recheck_every,
+                     "The whole grid every this many tracked updates in a row (0: never).")
+      .def_readwrite("doubt", &tracking_params::doubt,
+                     "The estimated log_prediction_support of a tracked update below which the "
+                     "whole grid is evaluated instead (-inf: never).")
+      .def_static("default", &default_tracking,
+                  "The values chosen by measurement for the localizer's default filter (C++ "
+                  "default_tracking()): epsilon 1e-9, the whole grid every 16 tracked touches "
+                  "and when the support estimate falls below 3 nats. LocalizerConfig(tracking="
+                  "True) uses them.");
+  keyword_struct<tracking_params>(
+      tp, {"epsilon", "tolerance", "max_support", "recheck_every", "doubt"},
+      "Tracking (C++ tacmap::tracking_params, filter/bayes_filter.hpp): once the belief is "
+      "concentrated, a touch evaluates the likelihood only where the belief is and checks the "
+      "whole grid when the touch doubts the prediction and every recheck_every touches. The "
+      "default-constructed value is off (epsilon 0); TrackingParams.default() is the measured "
+      "choice.");
+
+  // ---- SlipRecheckParams ----
+  py::class_<slip_recheck_params> sr(m, "SlipRecheckParams");
+  sr.def_readwrite("doubt", &slip_recheck_params::doubt,
+                   "The touch's log_prediction_support below which it is looked at again as a "
+                   "slip (a log Bayes factor <= 0).")
+      .def_readwrite("broad_probability", &slip_recheck_params::broad_probability,
+                     "The slip hypothesis's share of the prediction, (0, 1).")
+      .def_readwrite("broad_sigma_mm", &slip_recheck_params::broad_sigma_mm,
+                     "The slip's spread, mm per axis.");
+  keyword_struct<slip_recheck_params>(
+      sr, {"doubt", "broad_probability", "broad_sigma_mm"},
+      "A second look at a touch that doubts its prediction (C++ tacmap::slip_recheck_params, "
+      "motion/robust_motion.hpp): its update is done again from the belief before the move, "
+      "predicted with a broad component — the hypothesis that the object slipped in the "
+      "grasp. LocalizerConfig.slip_recheck turns it on (Localizer only: a library's "
+      "per-object motion cannot take it).");
+
   // ---- LocalizerConfig ----
   py::class_<localizer_config> cfg(m, "LocalizerConfig");
   enum_property(cfg, "model", &localizer_config::model, model_names,
@@ -263,6 +303,18 @@ void bind_config(py::module_& m) {
                      "(LocalizerConfig.default_broad_probability, 0); 0: none.")
       .def_readwrite("broad_sigma_mm", &localizer_config::broad_sigma_mm,
                      "The broad motion component's spread, mm.")
+      .def_readwrite("burst", &localizer_config::burst,
+                     "How a press given as a burst of frames (touch_burst, touch_at_burst) is "
+                     "combined into one (BurstParams).")
+      .def_readwrite("working_mm_per_px", &localizer_config::working_mm_per_px,
+                     "The working resolution, mm per px: the scale the map is matched at. A "
+                     "finer photograph is resampled to it before the map is prepared, so a "
+                     "touch's cost is set by the object's area and the sensor, not the camera's "
+                     "pixels; positions stay in the photograph's millimetres. None: the sensor's "
+                     "pitch / 3 (LocalizerConfig.default_px_per_taxel). A coarser photograph is "
+                     "used as it is, with a warning (Localizer.warnings).")
+      .def_readonly_static("default_px_per_taxel", &localizer_config::default_px_per_taxel)
+      .def_readonly_static("min_px_per_taxel", &localizer_config::min_px_per_taxel)
       .def_readonly_static("default_appearance_switch",
                            &localizer_config::default_appearance_switch)
       .def_readonly_static("default_lost_probability", &localizer_config::default_lost_probability)
@@ -276,6 +328,24 @@ void bind_config(py::module_& m) {
       .def("name", &localizer_config::name,
            "A short name for tables: 'sift_lite/all_pairs/inverse/per_window', with "
            "'/tau=0.5' when tau is set, and so on.");
+  optional_params_property<localizer_config>(
+      cfg, "calibrate_sensor", &localizer_config::calibrate_sensor, self_calibration_params{},
+      "A sensor that calibrates itself (SelfCalibrationParams): every frame is first seen by an "
+      "online estimate of each taxel's gain and offset and of dead or stuck taxels, and "
+      "localized corrected (dead and stuck taxels never vote). The estimate outlives reset(); "
+      "reset_sensor_calibration() starts it again. None (the default): frames are used as read. "
+      "Measured: more sequences localized with a worn sensor, nothing changed for a healthy "
+      "one, about 0.15 ms a touch.");
+  optional_params_property<localizer_config>(
+      cfg, "tracking", &localizer_config::tracking, default_tracking(),
+      "Tracking (TrackingParams): once the belief is concentrated, a touch evaluates the "
+      "likelihood only where the belief is. None (the default): every touch evaluates the "
+      "whole grid. True: TrackingParams.default(). Localizer only (a library evaluates every "
+      "object's grid).");
+  optional_params_property<localizer_config>(
+      cfg, "slip_recheck", &localizer_config::slip_recheck, slip_recheck_params{},
+      "A touch that doubts its prediction is looked at again as a slip (SlipRecheckParams). "
+      "None (the default): off. Turn it on where objects slip in the grasp. Localizer only.");
   keyword_struct<localizer_config>(
       cfg, localizer_config_fields(),
       "Everything that configures the filter a Localizer (or a simulated experiment) runs (C++ "
@@ -330,6 +400,51 @@ void bind_config(py::module_& m) {
 }
 
 void bind_localizer(py::module_& m) {
+  // ---- SensorCalibration ----
+  py::class_<self_calibration>(m, "SensorCalibration",
+                               "What a sensor's self-calibration has learnt (C++ "
+                               "tacmap::self_calibration; LocalizerConfig.calibrate_sensor): "
+                               "each taxel's gain, offset and status. A copy, read-only.")
+      .def_property_readonly("touches", &self_calibration::touches, "Touches observed so far.")
+      .def_property_readonly(
+          "gain", [](const self_calibration& c) { return to_numpy(c.gain()); },
+          "Per-taxel gain, float32 (rows, cols); 1 where not estimated or healthy.")
+      .def_property_readonly(
+          "offset", [](const self_calibration& c) { return to_numpy(c.offset()); },
+          "Per-taxel offset in counts, float32 (rows, cols); 0 where not estimated.")
+      .def_property_readonly(
+          "live", [](const self_calibration& c) { return to_numpy(c.live()); },
+          "The taxels that vote (bool (rows, cols)): not dead, not stuck.")
+      .def_property_readonly(
+          "status",
+          [](const self_calibration& c) {
+            const taxel_geometry& g = c.geometry();
+            std::vector<std::vector<std::string>> out(static_cast<std::size_t>(g.rows));
+            for (Eigen::Index r = 0; r < g.rows; ++r)
+              for (Eigen::Index col = 0; col < g.cols; ++col)
+                out[static_cast<std::size_t>(r)].emplace_back(to_string(c.status(r, col)));
+            return out;
+          },
+          "Each taxel's status, rows of str: 'unestimated' (too few usable touches yet: left "
+          "as it is), 'healthy', 'calibrated', 'dead' or 'stuck' (dead and stuck never vote).")
+      .def(
+          "reason",
+          [](const self_calibration& c, Eigen::Index row, Eigen::Index col) {
+            const taxel_geometry& g = c.geometry();
+            if (row < 0 || row >= g.rows || col < 0 || col >= g.cols)
+              throw py::index_error("SensorCalibration.reason: (row, col) = (" +
+                                    std::to_string(row) + ", " + std::to_string(col) +
+                                    "); expected 0 <= row < " + std::to_string(g.rows) +
+                                    " and 0 <= col < " + std::to_string(g.cols));
+            return c.reason(row, col);
+          },
+          py::arg("row"), py::arg("col"),
+          "A sentence: why taxel (row, col) has its status (e.g. how many usable touches it "
+          "has seen and needs).")
+      .def("__repr__", [](const self_calibration& c) {
+        return "SensorCalibration(touches=" + std::to_string(c.touches()) + ")";
+      });
+
   // ---- TouchResult ----
   py::class_<touch_result>(m, "TouchResult",
                            "What one touch gave (C++ tacmap::touch_result): the estimate, how "
@@ -425,6 +540,10 @@ void bind_localizer(py::module_& m) {
           },
           "Each candidate's probability, under the belief, that the sensor lands on the map.")
       .def_property_readonly(
+          "candidates", [](const next_touch_ranking& r) { return moves_to_numpy(r.candidates); },
+          "The moves ranked, in input order (numpy float64 (N, 2), (dx_mm, dy_mm) each): "
+          "candidates[order[0]] is the best.")
+      .def_property_readonly(
           "best", [](const next_touch_ranking& r) { return r.best(); },
           "The index of the best candidate (order[0]).")
       .def_readonly("uninformative", &next_touch_ranking::uninformative,
@@ -439,6 +558,24 @@ void bind_localizer(py::module_& m) {
                ", candidates=" + std::to_string(r.score.size()) +
                ", uninformative=" + (r.uninformative ? "True" : "False") + ")";
       });
+
+  m.def(
+      "touch_region",
+      [](double x_min_mm, double x_max_mm, double y_min_mm, double y_max_mm, double step_mm) {
+        return moves_to_numpy(touch_region{.x_min_mm = x_min_mm,
+                                           .x_max_mm = x_max_mm,
+                                           .y_min_mm = y_min_mm,
+                                           .y_max_mm = y_max_mm,
+                                           .step_mm = step_mm}
+                                  .candidates());
+      },
+      py::arg("x_min_mm"), py::arg("x_max_mm"), py::arg("y_min_mm"), py::arg("y_max_mm"),
+      py::arg("step_mm") = 1.0,
+      "The moves of a reachable rectangle (C++ tacmap::touch_region::candidates()): a lattice "
+      "of step_mm from (x_min_mm, y_min_mm) to (x_max_mm, y_max_mm), relative to where the "
+      "sensor is now, as an (N, 2) float64 array of (dx_mm, dy_mm), x fastest — the "
+      "candidates of next_touch. Raises ValueError for a rectangle that is not finite or "
+      "inverted, a step that is not a finite positive number, or more than a million points.");
 
   // ---- Localizer ----
   py::class_<py_localizer>(m, "Localizer", localizer_doc)
@@ -488,12 +625,9 @@ void bind_localizer(py::module_& m) {
           "counts, or a motion that is not finite or does not fit the configuration.")
       .def(
           "touch_burst",
-          [](py_localizer& self, const py::iterable& frames, const py::object& moved) {
-            std::vector<tactile_frame> burst;
-            for (const py::handle f : frames)
-              burst.push_back(
-                  frame_of(self.impl, py::reinterpret_borrow<py::object>(f),
-                           "Localizer.touch_burst: frame " + std::to_string(burst.size())));
+          [](py_localizer& self, const py::object& frames, const py::object& moved) {
+            const std::vector<tactile_frame> burst =
+                burst_of(self.impl.sensor(), frames, "Localizer.touch_burst", "localizer");
             const motion mv = motion_of(moved, "Localizer.touch_burst: moved");
             const std::span<const tactile_frame> view(burst);
             return locked(self, [&](localizer& loc) {
@@ -525,26 +659,27 @@ void bind_localizer(py::module_& m) {
           "more than 5 degrees between touches; with unknown heading any frame will do, "
           "because only motion relative to the sensor is used.")
       .def(
+          "touch_at_burst",
+          [](py_localizer& self, const py::object& frames, double x_mm, double y_mm,
+             double theta_rad) {
+            const std::vector<tactile_frame> burst =
+                burst_of(self.impl.sensor(), frames, "Localizer.touch_at_burst", "localizer");
+            const std::span<const tactile_frame> view(burst);
+            return locked(self, [&](localizer& loc) {
+              return loc.touch_at(view, {.x_mm = x_mm, .y_mm = y_mm, .theta_rad = theta_rad});
+            });
+          },
+          py::arg("frames"), py::arg("x_mm"), py::arg("y_mm"), py::arg("theta_rad") = 0.0,
+          "touch_at() with a press read as a burst of frames (as touch_burst). Raises "
+          "ValueError for an empty burst or frames of different geometry, before anything "
+          "changes.")
+      .def(
           "next_touch",
           [](py_localizer& self, const py::object& candidates, int hypotheses,
              const std::string& objective) {
-            const auto a =
-                py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(candidates);
-            if (!a || a.ndim() != 2 || a.shape(1) != 2)
-              throw py::value_error(
-                  "Localizer.next_touch: candidates must be moves (dx_mm, dy_mm): an (N, 2) "
-                  "array or a sequence of pairs");
-            std::vector<odometry> moves;
-            for (py::ssize_t i = 0; i < a.shape(0); ++i)
-              moves.push_back({.dx_mm = a.at(i, 0), .dy_mm = a.at(i, 1)});
-            next_touch_params params{.hypotheses = hypotheses};
-            if (objective == "verdict")
-              params.objective = next_touch_objective::verdict;
-            else if (objective == "entropy")
-              params.objective = next_touch_objective::entropy;
-            else
-              throw py::value_error("Localizer.next_touch: objective = '" + objective +
-                                    "'; expected 'entropy' or 'verdict'");
+            const std::vector<odometry> moves = candidates_of(candidates, "Localizer.next_touch");
+            const next_touch_params params =
+                next_touch_params_of(hypotheses, objective, "Localizer.next_touch");
             return locked(self, [&](localizer& loc) {
               return loc.next_touch(std::span<const odometry>(moves), params);
             });
@@ -646,6 +781,45 @@ void bind_localizer(py::module_& m) {
           "The map (a float32 copy).")
       .def_property_readonly(
           "mm_per_px", [](py_localizer& self) { return self.impl.mm_per_px(); }, "The map's scale.")
+      .def_property_readonly(
+          "photo_mm_per_px", [](py_localizer& self) { return self.impl.photo_mm_per_px(); },
+          "The photograph's own scale, as given to the constructor (mm_per_px is the working "
+          "resolution the map is matched at; positions are millimetres either way).")
+      .def_property_readonly(
+          "warnings",
+          [](py_localizer& self) {
+            return std::vector<std::string>(self.impl.warnings().begin(),
+                                            self.impl.warnings().end());
+          },
+          "What the localizer could not do as well as it should, in words (a list of str, "
+          "from construction): e.g. a photograph coarser than the working resolution and what "
+          "that costs in accuracy. Empty when nothing is amiss; tacmap prints nothing, show "
+          "them to the user.")
+      .def_property_readonly(
+          "restarts",
+          [](py_localizer& self) {
+            return locked(self, [](localizer& loc) { return loc.restarts(); });
+          },
+          "Restarts from a uniform belief since construction or reset() (TouchResult.restarted "
+          "says when: the motion carried every state off the map, or a touch ruled them all "
+          "out).")
+      .def_property_readonly(
+          "sensor_calibration",
+          [](py_localizer& self) -> std::optional<self_calibration> {
+            return locked(self, [](localizer& loc) -> std::optional<self_calibration> {
+              if (const self_calibration* c = loc.sensor_calibration()) return *c;
+              return std::nullopt;
+            });
+          },
+          "The sensor's self-calibration (a SensorCalibration copy), or None when "
+          "config.calibrate_sensor is off.")
+      .def(
+          "reset_sensor_calibration",
+          [](py_localizer& self) {
+            locked(self, [](localizer& loc) { loc.reset_sensor_calibration(); });
+          },
+          "Forgets what the self-calibration learnt (a new or repaired sensor); reset() keeps "
+          "it.")
       .def_property_readonly(
           "sensor", [](py_localizer& self) { return self.impl.sensor(); },
           "The sensor's geometry (a TaxelGeometry copy).")

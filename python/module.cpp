@@ -1,6 +1,6 @@
 // tacmap's Python module: the module itself. Each part of the API is bound in its own
-// translation unit (core.cpp, localizer.cpp, sim.cpp, io.cpp, descriptor.cpp) so that the heavy
-// ones (the localizer's filters, the experiment) compile in parallel.
+// translation unit (core.cpp, localizer.cpp, library.cpp, sim.cpp, io.cpp, descriptor.cpp) so that
+// the heavy ones (the localizer's filters, the experiment) compile in parallel.
 #include "bindings.hpp"
 // (bindings.hpp first: it defines TACMAP_ASSERT for the tacmap headers below.)
 
@@ -28,6 +28,9 @@ it is, and a verdict ('localized', 'uncertain', 'contradicted', 'rejected_frame'
         r = loc.touch(sim.render(x, y), step.measured_motion if k else None)
         print(r.verdict, r.position_mm, r.probability_within)
 
+LibraryLocalizer does the same over a library of photographs: which object, and where, with
+P(none of these) beside the objects.
+
 Also: LocalizerConfig (the filter's configuration; enumerations are strings), Simulator and
 ScenarioParams (simulated touches), load_protocol and Experiment (the paper's evaluation on one
 map), SessionReader (recorded sessions), SiftLite and ClassicSift (dense descriptors),
@@ -44,6 +47,7 @@ during map preparation, touches, experiment runs and descriptor computation.)doc
   tp::bind_core(m);
   tp::bind_config(m);
   tp::bind_localizer(m);
+  tp::bind_library(m);
   tp::bind_simulation(m);
   tp::bind_io(m);
   tp::bind_descriptors(m);
