@@ -500,7 +500,8 @@ class bayes_filter {
     if (!(std::isfinite(radius_mm) && radius_mm >= 0.0))
       detail::fail("bayes_filter::most_probable_disc: radius ", radius_mm,
                    " mm; expected a finite radius >= 0");
-    if (summarised()) return stats_[0].most_probable_disc_summarised(grid_, radius_mm);
+    if constexpr (summary_grid)
+      if (summarised()) return stats_[0].most_probable_disc_summarised(grid_, radius_mm);
     const Eigen::Index k = leading_block();
     return stats_[static_cast<std::size_t>(k)].most_probable_disc(statistics_grid(k), block(k),
                                                                   radius_mm);
@@ -524,8 +525,9 @@ class bayes_filter {
     if (!(std::isfinite(tolerance_rad) && tolerance_rad >= 0.0))
       detail::fail("bayes_filter::heading_probability_within: tolerance ", tolerance_rad,
                    " rad; expected a finite angle >= 0");
-    if (summarised())
-      return stats_[0].heading_probability_summarised(grid_, heading_rad, tolerance_rad);
+    if constexpr (summary_grid)
+      if (summarised())
+        return stats_[0].heading_probability_summarised(grid_, heading_rad, tolerance_rad);
     const Eigen::Index k = leading_block();
     return stats_[static_cast<std::size_t>(k)].heading_probability_within(block(k), heading_rad,
                                                                           tolerance_rad);
@@ -566,9 +568,10 @@ class bayes_filter {
   // True when the position statistics come from their row summary (pose grids:
   // position_statistics::summarises), brought up to date here with the rows changed since the
   // last call: a tracked touch's estimate and verdict then cost the rows its boxes touched.
+  static constexpr bool summary_grid =
+      !library_state_grid<Grid> && Grid::dimension == 3 && has_circular_coordinates<Grid>;
   bool summarised() const {
-    if constexpr (!library_state_grid<Grid> && Grid::dimension == 3 &&
-                  has_circular_coordinates<Grid>) {
+    if constexpr (summary_grid) {
       if (!stats_[0].summarises()) return false;
       stats_[0].refresh(grid_, block(0), since_stats_);
       since_stats_.clear();
@@ -1051,7 +1054,7 @@ auto bayes_filter<Grid, Motion, Measurement>::estimate() const -> estimate_type 
     e.object_probability = std::move(p);
     return e;
   } else {
-    if constexpr (Grid::dimension == 3 && has_circular_coordinates<Grid>)
+    if constexpr (summary_grid)
       if (summarised()) return stats_[0].estimate_summarised(grid_);
     return stats_[0].estimate(grid_, block(0));
   }
