@@ -15,8 +15,10 @@
 #include "tacmap/descriptor/dense_sift.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
 #include "tacmap/grid/pose_grid.hpp"
+#include "tacmap/localizer.hpp"
 #include "tacmap/measurement/rotated_descriptor_likelihood.hpp"
 #include "tacmap/motion/pose_odometry_gaussian.hpp"
+#include "tacmap/sim/tactile_simulator.hpp"
 #include "tacmap/testing/conformance.hpp"
 
 namespace test_pose_tracking {
@@ -335,6 +337,157 @@ TEST_CASE("a tracked pose filter's windowed predicts stay within their bound of 
   // This scenario's touches contradict the prediction now and then (full updates, rho above
   // the tolerance), after which the next predict moves the whole grid: 3 of 8 are windowed.
   CHECK(windowed >= 3);
+}
+
+namespace {
+// The per-state reference statistics of `f`'s belief, from a fresh position_statistics (no
+// summary, no cache): estimate_per_state, most_probable_disc, heading_probability_within.
+template <class Filter>
+void check_summary_against_passes(const Filter& f, double tolerance) {
+  using G = typename Filter::grid_type;
+  const tacmap::detail::position_statistics<G> reference(f.grid());
+  const typename tacmap::detail::position_statistics<G>::view_type b(f.belief().data(),
+                                                                     f.belief().size());
+  const auto ref = reference.estimate_per_state(f.grid(), b);
+  const auto got = f.estimate();
+  CHECK(got.map_index == ref.map_index);
+  CHECK(got.map_probability == ref.map_probability);
+  // The mean heading is atan2 of the resultant (sum p sin, sum p cos): where that is ~0 (a
+  // belief spread evenly over the headings) it is rounding noise in both, and so is every
+  // deviation from it. Compared where the resultant is not small.
+  double sum_cos = 0.0, sum_sin = 0.0;
+  for (Eigen::Index i = 0; i < f.grid().size(); ++i) {
+    const double a = f.grid().state_mm(i)(2);
+    sum_cos += static_cast<double>(f.belief()(i)) * std::cos(a);
+    sum_sin += static_cast<double>(f.belief()(i)) * std::sin(a);
+  }
+  const Eigen::Index compared = std::hypot(sum_cos, sum_sin) > 1e-3 ? 3 : 2;
+  CHECK((got.mean_mm - ref.mean_mm).head(compared).cwiseAbs().maxCoeff() <= tolerance);
+  CHECK((got.covariance_mm2 - ref.covariance_mm2)
+            .topLeftCorner(compared, compared)
+            .cwiseAbs()
+            .maxCoeff() <= tolerance * (1.0 + ref.covariance_mm2.cwiseAbs().maxCoeff()));
+  CHECK(got.entropy_nats == doctest::Approx(ref.entropy_nats).epsilon(1e-6));
+  REQUIRE(got.hypothesis_probability.size() == ref.hypothesis_probability.size());
+  for (std::size_t h = 0; h < ref.hypothesis_probability.size(); ++h)
+    CHECK(got.hypothesis_probability[h] == doctest::Approx(ref.hypothesis_probability[h]));
+  const auto disc = f.most_probable_disc(5.0);
+  const auto ref_disc = reference.most_probable_disc(f.grid(), b, 5.0);
+  CHECK(disc.first == ref_disc.first);  // the same marginal, summed in the same order
+  CHECK(disc.second == ref_disc.second);
+  for (const double tol : {0.05, 0.2, 1.0}) {
+    const double heading = ref.map_mm(2);
+    CHECK(f.heading_probability_within(heading, tol) ==
+          doctest::Approx(reference.heading_probability_within(b, heading, tol)).epsilon(1e-9));
+  }
+}
+}  // namespace
+
+TEST_CASE("a pose filter's estimate and verdict from its row summary equal the per-state passes") {
+  // The filter keeps a summary of its belief row by row and recomputes only the rows a tracked
+  // touch changed (position_statistics::summarises): after every predict and update of a
+  // tracking walk (windowed predicts, tracked updates, full ones), compared with the per-state
+  // passes over the whole belief. A row the filter failed to mark as changed would keep its
+  // old sums, and the mean, MAP or disc would drift from the reference.
+  walking_sensor sensor;
+  auto f = sensor.localized_filter();
+  f.set_tracking({.epsilon = 1e-6});
+  check_summary_against_passes(f, 1e-9);
+  int windowed = 0, tracked = 0;
+  for (int step = 0; step < 8; ++step) {
+    CAPTURE(step);
+    windowed += f.predict(sensor.walk(step, 0.5 * sensor.grid.angle_step_rad())).windowed ? 1 : 0;
+    check_summary_against_passes(f, 1e-9);
+    tracked += f.update(sensor.touch()).path == update_path::tracked ? 1 : 0;
+    check_summary_against_passes(f, 1e-9);
+  }
+  CHECK(windowed >= 3);
+  CHECK(tracked >= 3);
+  // A prior that is not one peak: spread over the whole grid, half on one heading.
+  Eigen::ArrayXf prior = Eigen::ArrayXf::LinSpaced(f.grid().size(), 1.0F, 2.0F);
+  prior.head(f.grid().rows() * f.grid().cols()) *= 40.0F;
+  f.set_prior(prior);
+  check_summary_against_passes(f, 1e-9);
+  f.reset();
+  check_summary_against_passes(f, 1e-9);
+}
+
+TEST_CASE("the front door's pose filter, tracking with the motion floor: summary against passes") {
+  // The default models (latent appearance: two hypothesis blocks; the robust motion's floor on
+  // every state), through tacmap::localizer with tracking: each touch's statistics against the
+  // per-state passes over the filter's belief.
+  tacmap::localizer_config c;
+  c.headings = 12;
+  c.tracking = tacmap::default_tracking();
+  const double mm_per_px = 3.4 / 3.0;
+  tacmap::localizer loc(map64(), mm_per_px, c);
+  tacmap::tactile_simulator sim(map64() * 4.0F, {.width = 64, .height = 64}, mm_per_px,
+                                {.seed = 7});
+  REQUIRE(loc.pose_filter() != nullptr);
+  // Round a 4 mm square near the map's centre (right, down, left, up).
+  constexpr double square[4][2] = {{0.0, 0.0}, {4.0, 0.0}, {4.0, 4.0}, {0.0, 4.0}};
+  const double x0 = 30.0, y0 = 32.0;
+  for (int step = 0; step < 12; ++step) {
+    CAPTURE(step);
+    const int k = step % 4, prev = (step + 3) % 4;
+    const tacmap::tactile_frame frame =
+        sim.render({.x_mm = x0 + square[k][0], .y_mm = y0 + square[k][1]});
+    const tacmap::touch_result r =
+        step == 0
+            ? loc.touch(frame)
+            : loc.touch(frame, tacmap::sensor_odometry{.du_mm = square[k][0] - square[prev][0],
+                                                       .dv_mm = square[k][1] - square[prev][1]});
+    const auto& f = *loc.pose_filter();
+    check_summary_against_passes(f, 1e-9);
+    // The verdict's figure is the reference's.
+    using G = typename std::decay_t<decltype(f)>::grid_type;
+    const tacmap::detail::position_statistics<G> reference(f.grid());
+    const auto ref_disc = reference.most_probable_disc(
+        f.grid(), {f.belief().data(), f.belief().size()}, tacmap::confidence_params{}.radius_mm);
+    CHECK(r.probability_within == ref_disc.second);
+  }
+}
+
+TEST_CASE("saving a tracking pose filter again copies only what changed, bit for bit") {
+  // save_state into the same saved state copies only the cells changed since the previous save
+  // (a tracked touch: the boxes its windowed predict and tracked update wrote). After every
+  // save, the saved belief must equal the belief bit for bit; restoring after a predict and an
+  // update must give the saved belief back bit for bit. A cell the filter failed to mark would
+  // keep the saved state's older value.
+  walking_sensor sensor;
+  auto f = sensor.localized_filter();
+  f.set_tracking({.epsilon = 1e-6});
+  typename decltype(f)::saved_state saved;
+  int windowed = 0;
+  for (int step = 0; step < 10; ++step) {
+    CAPTURE(step);
+    f.save_state(saved);
+    const Eigen::ArrayXf before = f.belief();
+    REQUIRE((saved.belief() == before).all());
+    const tacmap::sensor_odometry u = sensor.walk(step, 0.5 * sensor.grid.angle_step_rad());
+    windowed += f.predict(u).windowed ? 1 : 0;
+    (void)f.update(sensor.touch());
+    CHECK((saved.belief() == before).all());  // what the slip re-check reads
+    if (step % 3 == 2) {
+      // A refused touch: back to the saved state, then the same touch again.
+      const Eigen::ArrayXf after = f.belief();
+      f.restore_state(saved);
+      CHECK((f.belief() == before).all());
+      f.save_state(saved);  // a whole copy (the restore swapped the buffers)
+      CHECK((saved.belief() == before).all());
+      (void)f.predict(u);
+      (void)f.update(sensor.touch());
+      CHECK((f.belief() == after).all());
+    }
+  }
+  CHECK(windowed >= 3);
+  // A copy of the filter saving into the same state: a whole copy, still bit for bit.
+  auto g = f;
+  (void)g.update(sensor.touch());
+  g.save_state(saved);
+  CHECK((saved.belief() == g.belief()).all());
+  f.save_state(saved);
+  CHECK((saved.belief() == f.belief()).all());
 }
 
 }  // namespace test_pose_tracking

@@ -23,6 +23,7 @@
 #include "tacmap/angle.hpp"
 #include "tacmap/detail/mass_sum.hpp"
 #include "tacmap/executor/concept.hpp"
+#include "tacmap/filter/detail/changed_cells.hpp"
 #include "tacmap/filter/detail/position_statistics.hpp"
 #include "tacmap/filter/detail/posterior_kernel.hpp"
 #include "tacmap/filter/detail/support.hpp"
@@ -270,6 +271,7 @@ class bayes_filter {
   /// each object's prior (`object_prior()`) spread evenly over its states.
   void reset() {
     region_.reset();
+    changed_all();
     if constexpr (library_state_grid<Grid>) {
       for (Eigen::Index k = 0; k < grid_.objects(); ++k)
         belief_.segment(grid_.object_offset(k), grid_.object_size(k))
@@ -298,8 +300,15 @@ class bayes_filter {
   /// motion and measurement models keep no state between calls). `save_state` then
   /// `restore_state` make a step of several calls all or nothing: the localizers save before
   /// each touch and restore when any part of it throws (a touch with motion whose update then
-  /// fails must not leave the motion applied). One belief copy (a memcpy of `size()` values,
-  /// into `s`'s storage after the first save: no allocation).
+  /// fails must not leave the motion applied). The first save into `s` copies the whole belief;
+  /// saving again into the same `s` copies only the cells of the belief image (in every layer)
+  /// that changed since the previous save — after a tracked touch, the boxes the windowed
+  /// predict and the tracked update wrote, a few percent of a pose belief — and nothing else
+  /// changes between saves, so `s` then holds the belief bit for bit as a whole copy would.
+  /// (That relies on the motion model's `predict_boxes` writing only inside the boxes and the
+  /// rectangles it reports in `landed`, as `moves_box` requires.) A copy or move of the filter
+  /// or of `s`, a `restore_state`, or a save into `s` by another filter makes the next save a
+  /// whole copy again. No allocation after the first save.
   class saved_state {
     friend class bayes_filter;
 
@@ -312,10 +321,25 @@ class bayes_filter {
     std::optional<tracked_region> region_;
     double reference_log_uniform_ = std::numeric_limits<double>::quiet_NaN();
     int tracked_run_ = 0;
+    detail::save_link source_;  // the filter whose belief `belief_` holds (as of its last save)
   };
-  void save_state(saved_state& s) const {
-    s.belief_.resize(belief_.size());
-    s.belief_ = belief_;
+  void save_state(saved_state& s) {
+    const bool incremental = s.source_.other == this && last_saved_.other == &s &&
+                             !since_save_.all() && s.belief_.size() == belief_.size();
+    if (incremental) {
+      const Eigen::Index cols = grid_.cols(), plane = grid_.rows() * cols;
+      for (const Eigen::Index r : since_save_.touched_rows()) {
+        const Eigen::Index lo = since_save_.lo(r), width = since_save_.hi(r) - lo;
+        for (Eigen::Index at = r * cols + lo; at < belief_.size(); at += plane)
+          s.belief_.segment(at, width) = belief_.segment(at, width);
+      }
+    } else {
+      s.belief_.resize(belief_.size());
+      s.belief_ = belief_;
+    }
+    since_save_.clear();
+    s.source_.other = this;
+    last_saved_.other = &s;
     s.region_ = region_;
     s.reference_log_uniform_ = reference_log_uniform_;
     s.tracked_run_ = tracked_run_;
@@ -326,6 +350,9 @@ class bayes_filter {
     region_.swap(s.region_);
     std::swap(reference_log_uniform_, s.reference_log_uniform_);
     std::swap(tracked_run_, s.tracked_run_);
+    changed_all();
+    s.source_.other = nullptr;
+    last_saved_.other = nullptr;
   }
 
   /// Replaces the belief by a user prior: either a flat array of `size()` values or an image of
@@ -354,6 +381,7 @@ class bayes_filter {
       detail::fail("bayes_filter::set_prior: the prior sums to ", total,
                    "; expected a positive, finite total (it is normalised for you)");
     normalise(scratch_, total);
+    changed_all();
     belief_.swap(scratch_);
     region_.reset();
   }
@@ -472,6 +500,8 @@ class bayes_filter {
     if (!(std::isfinite(radius_mm) && radius_mm >= 0.0))
       detail::fail("bayes_filter::most_probable_disc: radius ", radius_mm,
                    " mm; expected a finite radius >= 0");
+    if constexpr (summary_grid)
+      if (summarised()) return stats_[0].most_probable_disc_summarised(grid_, radius_mm);
     const Eigen::Index k = leading_block();
     return stats_[static_cast<std::size_t>(k)].most_probable_disc(statistics_grid(k), block(k),
                                                                   radius_mm);
@@ -495,6 +525,9 @@ class bayes_filter {
     if (!(std::isfinite(tolerance_rad) && tolerance_rad >= 0.0))
       detail::fail("bayes_filter::heading_probability_within: tolerance ", tolerance_rad,
                    " rad; expected a finite angle >= 0");
+    if constexpr (summary_grid)
+      if (summarised())
+        return stats_[0].heading_probability_summarised(grid_, heading_rad, tolerance_rad);
     const Eigen::Index k = leading_block();
     return stats_[static_cast<std::size_t>(k)].heading_probability_within(block(k), heading_rad,
                                                                           tolerance_rad);
@@ -531,6 +564,21 @@ class bayes_filter {
       return grid_.object(k);
     else
       return grid_;
+  }
+  // True when the position statistics come from their row summary (pose grids:
+  // position_statistics::summarises), brought up to date here with the rows changed since the
+  // last call: a tracked touch's estimate and verdict then cost the rows its boxes touched.
+  static constexpr bool summary_grid =
+      !library_state_grid<Grid> && Grid::dimension == 3 && has_circular_coordinates<Grid>;
+  bool summarised() const {
+    if constexpr (summary_grid) {
+      if (!stats_[0].summarises()) return false;
+      stats_[0].refresh(grid_, block(0), since_stats_);
+      since_stats_.clear();
+      return true;
+    } else {
+      return false;
+    }
   }
   static std::vector<statistics_type> make_statistics(const Grid& grid) {
     std::vector<statistics_type> out;
@@ -571,6 +619,7 @@ class bayes_filter {
           "); the measurement contradicts the prediction. "
           "The belief is unchanged; call reset() to start again from a uniform belief");
     normalise(scratch_, total);
+    changed_all();
     belief_.swap(scratch_);
     region_.reset();
     // sums.likelihood >= 1 (the maximum's own factor), so the logarithm is finite.
@@ -628,6 +677,28 @@ class bayes_filter {
       return 0.0;
   }
   [[nodiscard]] Eigen::Index layers() const { return grid_.size() / (grid_.rows() * grid_.cols()); }
+  // The cells of the belief image (every layer) changed since the last save_state (what the
+  // next one copies) and since the position statistics last summarised the belief. Every write
+  // to belief_ marks what it may change first; library grids (blocks of different images) mark
+  // everything.
+  detail::changed_cells since_save_;
+  mutable detail::changed_cells since_stats_;
+  detail::save_link last_saved_;  // the saved_state the last save_state wrote
+  void changed_all() {
+    since_save_.mark_all();
+    since_stats_.mark_all();
+  }
+  template <class Cells>
+  void changed(const Cells& cells) {
+    if constexpr (library_state_grid<Grid>) {
+      changed_all();
+    } else {
+      for (const auto& c : cells) {
+        since_save_.mark(c);
+        since_stats_.mark(c);
+      }
+    }
+  }
   // Position statistics (coordinates cached once): one per object for library grids.
   std::vector<statistics_type> stats_;
 };
@@ -648,6 +719,8 @@ bayes_filter<Grid, Motion, Measurement>::bayes_filter(Grid grid, Motion motion,
       belief_(grid_.size()),
       scratch_(grid_.size()),
       log_likelihood_(grid_.size()),
+      since_save_(grid_.rows(), grid_.cols()),
+      since_stats_(grid_.rows(), grid_.cols()),
       // State coordinates are fixed for the filter's life: cached once (relative to the first
       // state, which keeps them small) so estimate() is passes over the belief, not N grid calls.
       stats_(make_statistics(grid_)) {
@@ -676,7 +749,18 @@ prediction_report bayes_filter<Grid, Motion, Measurement>::predict(const control
       const double before =
           detail::mass_in(belief_.data(), old, grid_.rows(), grid_.cols(), layers());
       double dropped = 0.0;
-      if (motion_.predict_boxes(grid_, belief_, old, u, landed_, dropped)) {
+      // The motion writes inside the old boxes and the rectangles it reports in `landed_`
+      // (moves_box); what it wrote before an exception is unknown.
+      changed(old);
+      bool moved = false;
+      try {
+        moved = motion_.predict_boxes(grid_, belief_, old, u, landed_, dropped);
+      } catch (...) {
+        changed_all();
+        throw;
+      }
+      if (moved) {
+        changed(landed_);
         // Where the mass now is: the windows, overlapping ones united (disjoint boxes, so that
         // the next update counts each state once). The states outside them kept their values;
         // so did the states of the new region that were outside the old boxes: their mass
@@ -727,6 +811,7 @@ prediction_report bayes_filter<Grid, Motion, Measurement>::predict(const control
         " (or with negative values); expected finite probabilities >= 0 with a positive sum. "
         "The belief is unchanged; check the motion model");
   normalise(scratch_, total);
+  changed_all();
   belief_.swap(scratch_);
   return report;
 }
@@ -875,6 +960,7 @@ update_path bayes_filter<Grid, Motion, Measurement>::tracked_update(const measur
           !(inverse < static_cast<double>(std::numeric_limits<scalar_type>::max())))
         return update_path::full_contradicted;
       const auto scale = static_cast<scalar_type>(inverse);
+      changed(in);
       for (const state_range& r : in)
         belief_.segment(r.begin, r.end - r.begin) =
             scratch_.segment(r.begin, r.end - r.begin) * scale;
@@ -893,6 +979,7 @@ update_path bayes_filter<Grid, Motion, Measurement>::tracked_update(const measur
       if (!(inverse < static_cast<double>(std::numeric_limits<scalar_type>::max())))
         return update_path::full_contradicted;  // the normaliser would overflow: the full path
       const auto scale = static_cast<scalar_type>(inverse);
+      changed_all();
       belief_ *= static_cast<scalar_type>(outside_factor * inverse);
       for (const state_range& r : in)
         belief_.segment(r.begin, r.end - r.begin) =
@@ -967,6 +1054,8 @@ auto bayes_filter<Grid, Motion, Measurement>::estimate() const -> estimate_type 
     e.object_probability = std::move(p);
     return e;
   } else {
+    if constexpr (summary_grid)
+      if (summarised()) return stats_[0].estimate_summarised(grid_);
     return stats_[0].estimate(grid_, block(0));
   }
 }

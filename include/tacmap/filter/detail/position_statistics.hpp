@@ -15,6 +15,7 @@
 #include "tacmap/angle.hpp"
 #include "tacmap/config.hpp"
 #include "tacmap/detail/mass_sum.hpp"
+#include "tacmap/filter/detail/changed_cells.hpp"
 #include "tacmap/filter/state_estimate.hpp"
 #include "tacmap/grid/concept.hpp"
 #include "tacmap/grid/latent_grid.hpp"
@@ -44,6 +45,163 @@ class position_statistics {
     for (Eigen::Index i = 0; i < offsets_mm_.cols(); ++i)
       offsets_mm_.col(i) = grid.state_mm(i) - origin_mm_;
     if constexpr (G::dimension >= 2) lattice_step_ = lattice_step(grid);
+    if constexpr (G::dimension == 3 && has_circular_coordinates<G>)
+      if (G::circular[2] && !G::circular[0] && !G::circular[1] && positions_form_lattice())
+        summarises_ = layered_lattice(grid);
+  }
+
+  /// True when the statistics can come from a summary of the belief kept row by row
+  /// (`refresh`, then the `*_summarised` members): a pose grid's positions, each heading layer
+  /// the same lattice at one angle. The summary holds, for every (heading layer, image row) of
+  /// the position belief p (the hypotheses summed), the sums of p, c p and c^2 p (c the
+  /// column), of p log p, its largest value and first column, each hypothesis's mass, and the
+  /// position marginal (headings and hypotheses summed) as an image. A refresh recomputes only
+  /// the rows whose cells changed (`changed_cells`: after a tracked touch the few rows of its
+  /// boxes), so a localized touch's estimate and verdict cost those rows and a pass over the
+  /// rows' sums, not a pass over every state. Every row's figures are recomputed whole from the
+  /// row's values, in the same order each time: a refreshed summary is the summary computed
+  /// afresh, bit for bit. The statistics from it match the per-state passes (`estimate`,
+  /// `most_probable_disc`, `heading_probability_within`) to rounding: the MAP state and the
+  /// disc exactly, the moments and probabilities within 1e-9, the entropy within 1e-6
+  /// (relative, tested; the mean heading where the headings' resultant is not ~0, where it is
+  /// rounding noise in both).
+  [[nodiscard]] bool summarises() const { return summarises_; }
+
+  /// Brings the summary up to date with `b` after the cells `changed` (every layer) changed
+  /// since the last refresh (`changed.all()`: recomputed whole, as the first refresh must be).
+  void refresh(const G& grid, view_type b, const changed_cells& changed) const
+      requires(G::dimension == 3) {
+    TACMAP_ASSERT(summarises_, "position_statistics::refresh: no summary for this grid");
+    const Eigen::Index rows = grid.rows();
+    if (changed.all() || !summary_ready_) {
+      const Eigen::Index cols = grid.cols();
+      summary_.assign(static_cast<std::size_t>(heading_layers_ * rows), row_summary{});
+      hypothesis_rows_.assign(static_cast<std::size_t>(hypotheses_ * heading_layers_ * rows), 0.0);
+      summary_marginal_.resize(rows, cols);
+      for (Eigen::Index r = 0; r < rows; ++r) refresh_row(b, r, rows, cols);
+      summary_ready_ = true;
+      return;
+    }
+    for (const Eigen::Index r : changed.touched_rows()) refresh_row(b, r, rows, grid.cols());
+  }
+
+  /// `estimate(grid, b)` from the summary (`refresh`ed with `b`).
+  [[nodiscard]] estimate_type estimate_summarised(const G& grid) const requires(G::dimension == 3) {
+    TACMAP_ASSERT(summary_ready_, "position_statistics: estimate_summarised before refresh");
+    estimate_type e;
+    const Eigen::Index rows = grid.rows(), cols = grid.cols();
+    const Eigen::Index n = offsets_mm_.cols();
+    if constexpr (latent_state_grid<G>) {
+      e.hypothesis_probability.assign(static_cast<std::size_t>(hypotheses_), 0.0);
+      for (Eigen::Index h = 0; h < hypotheses_; ++h) {
+        double m = 0.0;
+        for (Eigen::Index k = 0; k < heading_layers_ * rows; ++k)
+          m += hypothesis_rows_[static_cast<std::size_t>(h * heading_layers_ * rows + k)];
+        e.hypothesis_probability[static_cast<std::size_t>(h)] = m;
+      }
+      for (std::size_t h = 1; h < e.hypothesis_probability.size(); ++h)
+        if (e.hypothesis_probability[h] >
+            e.hypothesis_probability[static_cast<std::size_t>(e.map_hypothesis)])
+          e.map_hypothesis = static_cast<Eigen::Index>(h);
+    }
+    // The first state holding the largest value: the first row whose largest reaches it.
+    scalar_type top = -std::numeric_limits<scalar_type>::infinity();
+    for (const row_summary& s : summary_) top = std::max(top, s.top);
+    TACMAP_ASSERT(!std::isnan(top), "position_statistics::estimate: the belief holds a NaN");
+    Eigen::Index best = 0;
+    for (Eigen::Index k = 0; k < heading_layers_ * rows; ++k)
+      if (summary_[static_cast<std::size_t>(k)].top >= top) {
+        best = k * cols + summary_[static_cast<std::size_t>(k)].top_col;
+        break;
+      }
+    e.map_probability = static_cast<double>(top);
+    e.map_index = best + e.map_hypothesis * n;
+    e.map_mm = grid.state_mm(e.map_index);
+    // Moments in index units (c, r) per heading layer, then scaled: as circular_moments, the
+    // sums of p are not divided by the mass (a normalised belief's is 1 within rounding).
+    double m_all = 0.0, c_all = 0.0, cc_all = 0.0, r_all = 0.0, rr_all = 0.0, rc_all = 0.0;
+    double sum_cos = 0.0, sum_sin = 0.0, plogp = 0.0;
+    layer_mass_.assign(static_cast<std::size_t>(heading_layers_), 0.0);
+    layer_c_.assign(static_cast<std::size_t>(heading_layers_), 0.0);
+    layer_r_.assign(static_cast<std::size_t>(heading_layers_), 0.0);
+    for (Eigen::Index l = 0; l < heading_layers_; ++l) {
+      double m = 0.0, c = 0.0, rsum = 0.0;
+      for (Eigen::Index r = 0; r < rows; ++r) {
+        const row_summary& s = summary_[static_cast<std::size_t>(l * rows + r)];
+        const auto y = static_cast<double>(r);
+        m += s.s0;
+        c += s.s1;
+        cc_all += s.s2;
+        rsum += y * s.s0;
+        rr_all += y * y * s.s0;
+        rc_all += y * s.s1;
+        plogp += s.plogp;
+      }
+      const auto lu = static_cast<std::size_t>(l);
+      layer_mass_[lu] = m;
+      layer_c_[lu] = c;
+      layer_r_[lu] = rsum;
+      m_all += m;
+      c_all += c;
+      r_all += rsum;
+      sum_cos += m * layer_cos_[lu];
+      sum_sin += m * layer_sin_[lu];
+    }
+    const double sx = lattice_step_(0), sy = lattice_step_(1);
+    const double mc = c_all, mr = r_all;  // E[c], E[r] (unnormalised, as circular_moments)
+    typename estimate_type::vector_type mean = origin_mm_;
+    mean(0) += sx * mc;
+    mean(1) += sy * mr;
+    mean(2) = wrap_angle(std::atan2(sum_sin, sum_cos));
+    e.mean_mm = mean;
+    typename estimate_type::matrix_type cov = estimate_type::matrix_type::Zero();
+    // sum p (c - mc)^2 = sum c^2 p - 2 mc sum c p + mc^2 sum p, and so on.
+    cov(0, 0) = sx * sx * std::max(cc_all - 2.0 * mc * c_all + mc * mc * m_all, 0.0);
+    cov(1, 1) = sy * sy * std::max(rr_all - 2.0 * mr * r_all + mr * mr * m_all, 0.0);
+    cov(0, 1) = cov(1, 0) = sx * sy * (rc_all - mr * c_all - mc * r_all + mc * mr * m_all);
+    for (Eigen::Index l = 0; l < heading_layers_; ++l) {
+      const auto lu = static_cast<std::size_t>(l);
+      const double d = wrap_angle(layer_angle_[lu] - mean(2));
+      cov(2, 2) += layer_mass_[lu] * d * d;
+      cov(0, 2) += d * sx * (layer_c_[lu] - mc * layer_mass_[lu]);
+      cov(1, 2) += d * sy * (layer_r_[lu] - mr * layer_mass_[lu]);
+    }
+    cov(2, 0) = cov(0, 2);
+    cov(2, 1) = cov(1, 2);
+    e.covariance_mm2 = cov;
+    if (m_all > 0.0 && std::isfinite(m_all)) {
+      const double h = -plogp / m_all + std::log(m_all);
+      e.entropy_nats = std::clamp(h, 0.0, std::log(static_cast<double>(n)));
+    }
+    return e;
+  }
+
+  /// `most_probable_disc(grid, b, radius_mm)` from the summary (`refresh`ed with `b`): the same
+  /// position marginal, so the same disc bit for bit.
+  [[nodiscard]] std::pair<Eigen::Vector2d, double> most_probable_disc_summarised(
+      const G& grid, double radius_mm) const {
+    TACMAP_ASSERT(summary_ready_, "position_statistics: most_probable_disc_summarised first");
+    return disc_on(grid, summary_marginal_, radius_mm);
+  }
+
+  /// `heading_probability_within(b, heading_rad, tolerance_rad)` from the summary (`refresh`ed
+  /// with `b`): the heading layers' masses.
+  [[nodiscard]] double heading_probability_summarised(const G& grid, double heading_rad,
+                                                      double tolerance_rad) const
+      requires(G::dimension == 3) {
+    TACMAP_ASSERT(summary_ready_, "position_statistics: heading_probability_summarised first");
+    const Eigen::Index rows = grid.rows();
+    double mass = 0.0;
+    for (Eigen::Index l = 0; l < heading_layers_; ++l) {
+      if (!(std::abs(wrap_angle(layer_angle_[static_cast<std::size_t>(l)] - heading_rad)) <=
+            tolerance_rad))
+        continue;
+      // Each hypothesis's rows, summed in double from the belief (as the per-state pass).
+      for (Eigen::Index h = 0; h < hypotheses_; ++h)
+        for (Eigen::Index r = 0; r < rows; ++r)
+          mass += hypothesis_rows_[static_cast<std::size_t>((h * heading_layers_ + l) * rows + r)];
+    }
+    return std::min(mass, 1.0);
   }
 
   /// True when the grid's positions form an axis-aligned regular lattice (planar_grid,
@@ -226,6 +384,14 @@ class position_statistics {
     Eigen::Map<Eigen::ArrayXd> p_flat(p.data(), plane);
     for (Eigen::Index at = 0; at < b.size(); at += plane)
       p_flat += view_type(b.data() + at, plane).template cast<double>();
+    return disc_on(grid, p, radius_mm);
+  }
+
+ private:
+  // most_probable_disc of the position marginal p (rows x cols, every layer summed).
+  std::pair<Eigen::Vector2d, double> disc_on(const G& grid, const image<double>& p,
+                                             double radius_mm) const requires(G::dimension >= 2) {
+    const Eigen::Index rows = grid.rows(), cols = grid.cols();
     const double sx = std::abs(lattice_step_(0)), sy = std::abs(lattice_step_(1));
     // Reaches clamped to the grid (a disc wider than the grid covers all of it): a radius of
     // 1e300 mm would otherwise overflow the integer conversion.
@@ -327,6 +493,7 @@ class position_statistics {
     return {centre, std::min(mass, 1.0)};
   }
 
+ public:
   /// The mass of `b` whose heading lies within `tolerance_rad` of `heading_rad` (validated by
   /// the caller).
   [[nodiscard]] double heading_probability_within(view_type b, double heading_rad,
@@ -449,6 +616,86 @@ class position_statistics {
     return {sx, sy};
   }
 
+  // One (heading layer, image row) of the summary (see `summarises`).
+  struct row_summary {
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, plogp = 0.0;
+    scalar_type top = -std::numeric_limits<scalar_type>::infinity();
+    Eigen::Index top_col = 0;
+  };
+
+  // True when every heading layer's positions are the first layer's lattice and each layer's
+  // states share one angle; caches the layers' angles, cosines and sines.
+  bool layered_lattice(const G& grid) requires(G::dimension == 3) {
+    const Eigen::Index plane = grid.rows() * grid.cols(), n = offsets_mm_.cols();
+    if (n % plane != 0) return false;
+    heading_layers_ = n / plane;
+    if constexpr (latent_state_grid<G>)
+      hypotheses_ = grid.hypotheses();
+    else
+      hypotheses_ = 1;
+    const double tolerance = 1e-6 * (std::abs(lattice_step_(0)) + std::abs(lattice_step_(1)));
+    for (Eigen::Index l = 0; l < heading_layers_; ++l) {
+      const double angle = offsets_mm_(2, l * plane);
+      for (Eigen::Index i = 0; i < plane; ++i) {
+        const auto o = offsets_mm_.col(l * plane + i);
+        if (!(o(2) == angle) || std::abs(o(0) - offsets_mm_(0, i)) > tolerance ||
+            std::abs(o(1) - offsets_mm_(1, i)) > tolerance)
+          return false;
+      }
+      const double a = origin_mm_(2) + angle;
+      layer_angle_.push_back(a);
+      layer_cos_.push_back(std::cos(a));
+      layer_sin_.push_back(std::sin(a));
+    }
+    return true;
+  }
+
+  // Recomputes image row r of every heading layer: the position belief's row (the hypotheses
+  // summed in float, in order, as estimate's marginal), its sums and largest value, each
+  // hypothesis's row mass, and the position marginal's row (every layer summed in double, in
+  // order, as most_probable_disc's).
+  void refresh_row(view_type b, Eigen::Index r, Eigen::Index rows, Eigen::Index cols) const {
+    const Eigen::Index plane = rows * cols, n = heading_layers_ * plane;
+    auto& row = summary_row_;
+    if (column_weights_.size() != cols) {
+      column_weights_.resize(cols);
+      column_squares_.resize(cols);
+      for (Eigen::Index c = 0; c < cols; ++c) {
+        column_weights_(c) = static_cast<double>(c);
+        column_squares_(c) = static_cast<double>(c) * static_cast<double>(c);
+      }
+    }
+    auto marginal = summary_marginal_.row(r);
+    marginal.setZero();
+    const scalar_type tiny = std::numeric_limits<scalar_type>::min();
+    for (Eigen::Index l = 0; l < heading_layers_; ++l) {
+      const Eigen::Index at = l * plane + r * cols;
+      row = b.segment(at, cols);
+      hypothesis_rows_[static_cast<std::size_t>(l * rows + r)] = row.template cast<double>().sum();
+      for (Eigen::Index h = 1; h < hypotheses_; ++h) {
+        const auto part = b.segment(h * n + at, cols);
+        hypothesis_rows_[static_cast<std::size_t>((h * heading_layers_ + l) * rows + r)] =
+            part.template cast<double>().sum();
+        row += part;
+      }
+      row_summary& s = summary_[static_cast<std::size_t>(l * rows + r)];
+      row_double_ = row.template cast<double>();
+      s.s0 = row_double_.sum();
+      s.s1 = (row_double_ * column_weights_).sum();
+      s.s2 = (row_double_ * column_squares_).sum();
+      s.plogp = chunked_sum(row * (row + tiny).log());
+      s.top = row.maxCoeff();
+      Eigen::Index c = 0;
+      while (c + 1 < cols && !(row(c) >= s.top)) ++c;
+      s.top_col = c;
+    }
+    // Layer after layer in the belief's order (hypothesis-major), as most_probable_disc.
+    for (Eigen::Index h = 0; h < hypotheses_; ++h)
+      for (Eigen::Index l = 0; l < heading_layers_; ++l)
+        marginal +=
+            b.segment(h * n + l * plane + r * cols, cols).template cast<double>().transpose();
+  }
+
   // Positions the estimate describes: the base grid's states for latent grids, else all states.
   static Eigen::Index position_count(const G& grid) {
     if constexpr (latent_state_grid<G>)
@@ -469,6 +716,18 @@ class position_statistics {
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, 1> estimate_marginal_;
   mutable Eigen::MatrixXd moment_weights_, moment_rows_;
   mutable Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> moment_belief_;
+  // The summary (see `summarises`): per (heading layer, row), per (hypothesis, heading layer,
+  // row) the mass, the position marginal; the layers' angles; refresh's scratch.
+  bool summarises_ = false;
+  Eigen::Index heading_layers_ = 1, hypotheses_ = 1;
+  std::vector<double> layer_angle_, layer_cos_, layer_sin_;
+  mutable bool summary_ready_ = false;
+  mutable std::vector<row_summary> summary_;
+  mutable std::vector<double> hypothesis_rows_;
+  mutable image<double> summary_marginal_;
+  mutable std::vector<double> layer_mass_, layer_c_, layer_r_;
+  mutable Eigen::Array<scalar_type, Eigen::Dynamic, 1> summary_row_;
+  mutable Eigen::ArrayXd row_double_, column_weights_, column_squares_;
 };
 
 }  // namespace tacmap::detail
