@@ -974,9 +974,11 @@ int main(int argc, char** argv) try {
       const auto order = parse_choice<tacmap::touch_order>(
           "--touch-order", name,
           {{"random", tacmap::touch_order::protocol}, {"active", tacmap::touch_order::active}});
-      if (order == tacmap::touch_order::active && library)
+      if (order == tacmap::touch_order::active && library && library_mode_name != "closed")
         throw CLI::ValidationError("--touch-order",
-                                   "active touches are run for single maps; drop --library");
+                                   "active with --library-mode " + library_mode_name +
+                                       "; expected --library-mode closed (the library filter "
+                                       "chooses the touches on the object it holds)");
       for (auto c : configs) {
         c.order = order;
         c.active_candidates = active_candidates;

@@ -186,6 +186,62 @@ struct faulted_sequence {
   return out;
 }
 
+/// One move of a sequence whose touches are chosen while it runs (the active order) after the
+/// faults: where the touch really is and what odometry the filter is told.
+struct faulted_move {
+  touch_location truth;
+  odometry reported;
+  bool outlier = false;    ///< the reported move is an outlier
+  bool slipped = false;    ///< the object slipped before this touch
+  bool kidnapped = false;  ///< the sensor was put down elsewhere for this touch
+};
+
+/// `apply_faults` for one move of the active order: the arm moves from the true location `from`
+/// to `target` (a place on the object, chosen in the object's frame as it now lies), reporting
+/// `reported` (the true move and the protocol's noise); touch `t` (0-based, >= 1) is the one it
+/// moves to. The same faults as `apply_faults`, from `rng`, whatever the targets: each move
+/// draws its noise, outlier and direction; at the slip's touch the object moves `slip_mm` in a
+/// random direction that keeps this touch on `positions` (the later targets are chosen where it
+/// then lies); at the kidnap's touch the sensor lands on a random state of `positions` instead.
+/// After 200 draws with no direction keeping the touch on the map the slip is dropped, as in
+/// `apply_faults`.
+[[nodiscard]] inline faulted_move apply_faults_to_move(const exploration_faults& faults,
+                                                       std::size_t t, const touch_location& from,
+                                                       const touch_location& target,
+                                                       const odometry& reported,
+                                                       const planar_grid<float>& positions,
+                                                       sim_rng& rng) {
+  faulted_move out{target, reported};
+  const double pi = std::numbers::pi;
+  const double nx = rng.normal(), ny = rng.normal();
+  const double u = rng.uniform(), angle = 2.0 * pi * rng.uniform();
+  if (faults.odometry_sigma_mm)
+    out.reported = {target.x_mm - from.x_mm + *faults.odometry_sigma_mm * nx,
+                    target.y_mm - from.y_mm + *faults.odometry_sigma_mm * ny};
+  if (u < faults.outlier_probability) {
+    out.reported.dx_mm += faults.outlier_mm * std::cos(angle);
+    out.reported.dy_mm += faults.outlier_mm * std::sin(angle);
+    out.outlier = true;
+  }
+  if (faults.slip_touch == t + 1)
+    for (int attempt = 0; attempt < 200 && !out.slipped; ++attempt) {
+      const double a = 2.0 * pi * rng.uniform();
+      const double x = target.x_mm + faults.slip_mm * std::cos(a);
+      const double y = target.y_mm + faults.slip_mm * std::sin(a);
+      if (positions.nearest_state(x, y)) {
+        out.truth = {x, y};
+        out.slipped = true;
+      }
+    }
+  if (faults.kidnap_touch == t + 1) {
+    const auto s = positions.state_mm(
+        static_cast<Eigen::Index>(rng.below(static_cast<std::uint64_t>(positions.size()))));
+    out.truth = {s(0), s(1)};
+    out.kidnapped = true;
+  }
+  return out;
+}
+
 /// Whether the estimate is back within `threshold_mm` of the truth within `touches` touches of
 /// touch `from` (1-based) and stays there to the end: some touch in [from, from + touches]
 /// after which every error is below the threshold.
