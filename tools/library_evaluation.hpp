@@ -179,12 +179,14 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
     if (!quiet) std::fprintf(stderr, "\r%*s\r", 40, "");
     std::string per_touch, evaluated;
     for (std::size_t t = 0; t < total.recognized.size(); ++t) {
-      per_touch += (t ? ", " : "") + library_percent(total.recognized[t], total.touches_at[t]);
+      if (t > 0) per_touch += ", ";
+      per_touch += library_percent(total.recognized[t], total.touches_at[t]);
       char buf[32];
       std::snprintf(
           buf, sizeof buf, "%.1f",
           total.evaluated[t] / static_cast<double>(std::max<std::size_t>(1, total.touches_at[t])));
-      evaluated += (t ? ", " : "") + std::string(buf);
+      if (t > 0) evaluated += ", ";
+      evaluated += buf;
     }
     char ttr[32] = "-";
     if (!total.to_recognize.empty())

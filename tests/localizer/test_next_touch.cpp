@@ -3,6 +3,7 @@
 // over a library of two maps that differ on one half only.
 #include <doctest/doctest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -404,6 +405,22 @@ TEST_CASE("the active touch order with faults: each chosen move goes through the
   const auto again = e.run(1);
   for (std::size_t k = 0; k < r.touches.size(); ++k)
     CHECK(again.touches[k].true_x_mm == r.touches[k].true_x_mm);
+  // Both orders of a sequence meet the same odometry errors (noise and outlier), pairwise.
+  tacmap::localization_config protocol_order = c;
+  protocol_order.order = tacmap::touch_order::protocol;
+  tacmap::localization_experiment pe(p, protocol_order);
+  const auto q = pe.run(1);
+  for (std::size_t k = 1; k < r.touches.size(); ++k) {
+    if (k == 3) continue;  // the slip: the true move is not the arm's
+    const auto error = [](const tacmap::touch_record& now, const tacmap::touch_record& before) {
+      return std::array<double, 2>{now.reported_dx_mm - (now.true_x_mm - before.true_x_mm),
+                                   now.reported_dy_mm - (now.true_y_mm - before.true_y_mm)};
+    };
+    const auto ea = error(r.touches[k], r.touches[k - 1]);
+    const auto ep = error(q.touches[k], q.touches[k - 1]);
+    CHECK(ea[0] == doctest::Approx(ep[0]));
+    CHECK(ea[1] == doctest::Approx(ep[1]));
+  }
 }
 
 TEST_CASE("library_experiment, active order: the library filter chooses where the objects differ") {

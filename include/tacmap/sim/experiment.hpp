@@ -103,9 +103,9 @@ struct localization_config : localizer_config {
   std::size_t calibration_warmup = 0;
   /// Where the touches go (`touch_order`). Active: each sequence as long as the protocol's, the
   /// candidates drawn uniformly over the map's positions from the sequence's own stream of the
-  /// simulator seed (reproducible whatever sequences run), the odometry the true move plus the
-  /// protocol's noise (`touch_protocol::odometry_sigma_mm`) from the same stream; the faults
-  /// (`faults`) apply to each chosen move as they do to the protocol's (`apply_faults_to_move`,
+  /// simulator seed (reproducible whatever sequences run); each move's odometry error (the
+  /// protocol's noise, and the faults' `faults`) is that of the protocol's move at the same step,
+  /// so that both orders of a sequence meet the same errors (`carry_faults_to_move`,
   /// sim/faults.hpp).
   touch_order order = touch_order::protocol;
   std::size_t active_candidates = 32;  ///< candidates per touch (active order)
@@ -513,9 +513,9 @@ class basic_localization_experiment {
     filter.reset();
     sequence_result result;
     result.sequence = index;
-    // The active order's stream: candidates and odometry noise, its own per sequence.
+    // The active order's stream of candidates, its own per sequence.
     sim_rng active_rng(scenario_seed(config_.simulator_seed ^ 0x2545F4914F6CDD1DULL, index));
-    // Its faults (`apply_faults_to_move`), their own stream.
+    // Its slip's direction when the protocol's does not fit (`carry_faults_to_move`).
     sim_rng active_fault_rng(scenario_seed(
         config_.simulator_seed ^ 0x94D049BB133111EBULL ^ 0x2545F4914F6CDD1DULL, index));
     // Which touches a fault came before: the protocol's sequence's, or the active order's.
@@ -534,15 +534,9 @@ class basic_localization_experiment {
         if (config_.order == touch_order::active && step > 0) {
           const auto [target, state] = choose_next_touch(filter, previous, active_rng, hooks);
           location = static_cast<std::size_t>(state);
-          const double sigma = protocol_->odometry_sigma_mm;
-          reported.dx_mm = target.x_mm - previous.x_mm;
-          reported.dy_mm = target.y_mm - previous.y_mm;
-          const double nx = active_rng.normal(), ny = active_rng.normal();
-          reported.dx_mm += sigma * nx;
-          reported.dy_mm += sigma * ny;
           const faulted_move m =
-              apply_faults_to_move(config_.faults, step, previous, target, reported,
-                                   filter.grid().base(), active_fault_rng);
+              carry_faults_to_move(*protocol_, sequence, faulted, config_.faults, step, previous,
+                                   target, filter.grid().base(), active_fault_rng);
           truth = m.truth;
           reported = m.reported;
           outlier[step] = m.outlier ? 1 : 0;

@@ -196,47 +196,40 @@ struct faulted_move {
   bool kidnapped = false;  ///< the sensor was put down elsewhere for this touch
 };
 
-/// `apply_faults` for one move of the active order: the arm moves from the true location `from`
-/// to `target` (a place on the object, chosen in the object's frame as it now lies), reporting
-/// `reported` (the true move and the protocol's noise); touch `t` (0-based, >= 1) is the one it
-/// moves to. The same faults as `apply_faults`, from `rng`, whatever the targets: each move
-/// draws its noise, outlier and direction; at the slip's touch the object moves `slip_mm` in a
-/// random direction that keeps this touch on `positions` (the later targets are chosen where it
-/// then lies); at the kidnap's touch the sensor lands on a random state of `positions` instead.
-/// After 200 draws with no direction keeping the touch on the map the slip is dropped, as in
-/// `apply_faults`.
-[[nodiscard]] inline faulted_move apply_faults_to_move(const exploration_faults& faults,
-                                                       std::size_t t, const touch_location& from,
-                                                       const touch_location& target,
-                                                       const odometry& reported,
-                                                       const planar_grid<float>& positions,
-                                                       sim_rng& rng) {
-  faulted_move out{target, reported};
-  const double pi = std::numbers::pi;
-  const double nx = rng.normal(), ny = rng.normal();
-  const double u = rng.uniform(), angle = 2.0 * pi * rng.uniform();
-  if (faults.odometry_sigma_mm)
-    out.reported = {target.x_mm - from.x_mm + *faults.odometry_sigma_mm * nx,
-                    target.y_mm - from.y_mm + *faults.odometry_sigma_mm * ny};
-  if (u < faults.outlier_probability) {
-    out.reported.dx_mm += faults.outlier_mm * std::cos(angle);
-    out.reported.dy_mm += faults.outlier_mm * std::sin(angle);
-    out.outlier = true;
-  }
-  if (faults.slip_touch == t + 1)
-    for (int attempt = 0; attempt < 200 && !out.slipped; ++attempt) {
+/// `apply_faults`'s faults carried over to one move of a sequence whose touches are chosen while
+/// it runs (the active order), so that both orders of a sequence meet the same faults and compare
+/// pairwise: the arm moves from the true location `from` to `target` (a place on the object,
+/// chosen where the object now lies), touch `t` (0-based, >= 1) of `sequence` whose faulted
+/// version is `faulted`. The reported move is the true one plus the protocol's error for move t
+/// (`faulted.reported[t]` minus the true move: its noise and outlier); at the slip's touch the
+/// object moves by the protocol's slip offset (when that leaves `target` off `positions`, a
+/// direction that keeps it on is drawn from `rng`, 200 draws at most, else no slip); at the
+/// kidnap's touch the sensor lands where the protocol's did.
+[[nodiscard]] inline faulted_move carry_faults_to_move(
+    const touch_protocol& protocol, const touch_sequence& sequence, const faulted_sequence& faulted,
+    const exploration_faults& faults, std::size_t t, const touch_location& from,
+    const touch_location& target, const planar_grid<float>& positions, sim_rng& rng) {
+  faulted_move out{target, {target.x_mm - from.x_mm, target.y_mm - from.y_mm}};
+  out.reported.dx_mm += faulted.reported[t].dx_mm - sequence[t].true_motion.dx_mm;
+  out.reported.dy_mm += faulted.reported[t].dy_mm - sequence[t].true_motion.dy_mm;
+  out.outlier = faulted.outlier[t] != 0;
+  if (faulted.slipped && faults.slip_touch == t + 1) {
+    const touch_location& was = protocol.locations.at(sequence[t].location);
+    double ox = faulted.truth[t].x_mm - was.x_mm, oy = faulted.truth[t].y_mm - was.y_mm;
+    const double pi = std::numbers::pi;
+    for (int attempt = 0;
+         attempt < 200 && !positions.nearest_state(target.x_mm + ox, target.y_mm + oy); ++attempt) {
       const double a = 2.0 * pi * rng.uniform();
-      const double x = target.x_mm + faults.slip_mm * std::cos(a);
-      const double y = target.y_mm + faults.slip_mm * std::sin(a);
-      if (positions.nearest_state(x, y)) {
-        out.truth = {x, y};
-        out.slipped = true;
-      }
+      ox = faults.slip_mm * std::cos(a);
+      oy = faults.slip_mm * std::sin(a);
     }
-  if (faults.kidnap_touch == t + 1) {
-    const auto s = positions.state_mm(
-        static_cast<Eigen::Index>(rng.below(static_cast<std::uint64_t>(positions.size()))));
-    out.truth = {s(0), s(1)};
+    if (positions.nearest_state(target.x_mm + ox, target.y_mm + oy)) {
+      out.truth = {target.x_mm + ox, target.y_mm + oy};
+      out.slipped = true;
+    }
+  }
+  if (faulted.kidnapped && faults.kidnap_touch == t + 1) {
+    out.truth = faulted.truth[t];
     out.kidnapped = true;
   }
   return out;
