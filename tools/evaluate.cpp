@@ -616,6 +616,11 @@ int main(int argc, char** argv) try {
                  "--touch-order active: factor on the predicted log-likelihoods, (0, 1] "
                  "(next_touch_params::likelihood_scale)")
       ->check(CLI::Range(1e-6, 1.0));
+  int next_touch_hypotheses = tacmap::next_touch_params{}.hypotheses;
+  app.add_option("--next-touch-hypotheses", next_touch_hypotheses,
+                 "--touch-order active: hypotheses drawn from the belief per ranking "
+                 "(next_touch_params::hypotheses; the cost grows as its square)")
+      ->check(CLI::Range(1, 4096));
   std::string next_touch_objective = "verdict";
   app.add_option(
       "--next-touch-objective", next_touch_objective,
@@ -974,15 +979,18 @@ int main(int argc, char** argv) try {
       const auto order = parse_choice<tacmap::touch_order>(
           "--touch-order", name,
           {{"random", tacmap::touch_order::protocol}, {"active", tacmap::touch_order::active}});
-      if (order == tacmap::touch_order::active && library)
+      if (order == tacmap::touch_order::active && library && library_mode_name != "closed")
         throw CLI::ValidationError("--touch-order",
-                                   "active touches are run for single maps; drop --library");
+                                   "active with --library-mode " + library_mode_name +
+                                       "; expected --library-mode closed (the library filter "
+                                       "chooses the touches on the object it holds)");
       for (auto c : configs) {
         c.order = order;
         c.active_candidates = active_candidates;
         c.next_touch.objective = objective;
         c.next_touch.weigh_by_landing = weigh_by_landing;
         c.next_touch.likelihood_scale = likelihood_scale;
+        c.next_touch.hypotheses = next_touch_hypotheses;
         c.active_min_move_mm = active_min_move;
         if (order == tacmap::touch_order::active) {
           try {  // known heading, no faults: say which configurations cannot run it

@@ -79,6 +79,12 @@ struct library_tally {
   }
 };
 
+// A configuration's name in the tables and the CSV: its filter's, and "/active" when the library
+// filter chooses the touches (--touch-order active).
+inline std::string library_label(const tacmap::localization_config& c) {
+  return c.name() + (c.order == tacmap::touch_order::active ? "/active" : "");
+}
+
 inline std::string library_percent(std::size_t k, std::size_t n) {
   if (n == 0) return "-";
   char buf[32];
@@ -130,7 +136,8 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
       "|---|---|---|---|---|---|---|---|---|\n",
       k_objects);
   for (const auto& config : configs) {
-    if (!quiet) std::fprintf(stderr, "%s: preparing %zu maps\n", config.name().c_str(), k_objects);
+    if (!quiet)
+      std::fprintf(stderr, "%s: preparing %zu maps\n", library_label(config).c_str(), k_objects);
     tacmap::library_experiment experiment(objects, config);
     experiment.set_library_params(params);
     library_tally total;
@@ -158,13 +165,13 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
         char line[640];
         std::snprintf(line, sizeof line,
                       "%s,%s,%s,%zu,%zu,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%s,%zu,%d,%.6g,%.6g,%s\n",
-                      config.name().c_str(), to_string(mode), objects[object].name.c_str(), index,
-                      t + 1, objects[r.decided[t]].name.c_str(), r.object_probability[t][object],
-                      r.object_probability[t][r.decided[t]], r.touches[t].error_mm,
-                      r.known_object[t].error_mm, r.touches[t].probability_within,
-                      tacmap::to_string(r.touches[t].verdict), r.evaluated_objects[t],
-                      r.raised_dark ? 1 : 0, r.probability_unknown[t], r.log_open_set_factor[t],
-                      tacmap::to_string(r.open_set_verdict[t]));
+                      library_label(config).c_str(), to_string(mode), objects[object].name.c_str(),
+                      index, t + 1, objects[r.decided[t]].name.c_str(),
+                      r.object_probability[t][object], r.object_probability[t][r.decided[t]],
+                      r.touches[t].error_mm, r.known_object[t].error_mm,
+                      r.touches[t].probability_within, tacmap::to_string(r.touches[t].verdict),
+                      r.evaluated_objects[t], r.raised_dark ? 1 : 0, r.probability_unknown[t],
+                      r.log_open_set_factor[t], tacmap::to_string(r.open_set_verdict[t]));
         csv << line;
       }
       if (!quiet) std::fprintf(stderr, "\r%zu/%zu sequences", q + 1, sequences);
@@ -172,18 +179,20 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
     if (!quiet) std::fprintf(stderr, "\r%*s\r", 40, "");
     std::string per_touch, evaluated;
     for (std::size_t t = 0; t < total.recognized.size(); ++t) {
-      per_touch += (t ? ", " : "") + library_percent(total.recognized[t], total.touches_at[t]);
+      if (t > 0) per_touch += ", ";
+      per_touch += library_percent(total.recognized[t], total.touches_at[t]);
       char buf[32];
       std::snprintf(
           buf, sizeof buf, "%.1f",
           total.evaluated[t] / static_cast<double>(std::max<std::size_t>(1, total.touches_at[t])));
-      evaluated += (t ? ", " : "") + std::string(buf);
+      if (t > 0) evaluated += ", ";
+      evaluated += buf;
     }
     char ttr[32] = "-";
     if (!total.to_recognize.empty())
       std::snprintf(ttr, sizeof ttr, "%.1f", tacmap::median(total.to_recognize));
-    std::printf("| %s | %zu | %zu | %s | %s | %s / %s | %s | %zu | %s |\n", config.name().c_str(),
-                k_objects, total.sequences, per_touch.c_str(),
+    std::printf("| %s | %zu | %zu | %s | %s | %s / %s | %s | %zu | %s |\n",
+                library_label(config).c_str(), k_objects, total.sequences, per_touch.c_str(),
                 library_percent(total.recognized_by_4, total.sequences).c_str(),
                 library_percent(total.localized, total.sequences).c_str(),
                 library_percent(total.localized_known, total.sequences).c_str(), ttr,
@@ -199,7 +208,7 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
         "|---|---|---|---|---|---|---|\n",
         to_string(mode), config.open_set.prior_unknown);
     std::printf("| %s | %zu | %s / %s | %s / %s | %s / %s | %s / %s | %s |\n\n",
-                config.name().c_str(), total.sequences,
+                library_label(config).c_str(), total.sequences,
                 library_percent(total.false_any, total.sequences).c_str(),
                 library_percent(total.false_any_open, total.sequences).c_str(),
                 library_percent(total.false_last, total.sequences).c_str(),
@@ -212,7 +221,7 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
     std::printf(
         "\n| object (%s) | raised parts in the photo | sequences | recognized by touch 4 | "
         "localized: library / object known |\n|---|---|---|---|---|\n",
-        config.name().c_str());
+        library_label(config).c_str());
     for (std::size_t k = 0; k < k_objects; ++k) {
       const library_tally& t = per_object[k];
       std::printf("| %s | %s | %zu | %zu | %zu / %zu |\n", objects[k].name.c_str(),

@@ -1549,12 +1549,16 @@ class basic_localizer {
   /// first (ties keep the input order), `uninformative` when none is expected to decide more
   /// than another. The belief is unchanged. Throws std::invalid_argument for no candidates, a
   /// non-finite one or one off the map from anywhere on it (naming it and the map's extent), and
-  /// for an unknown heading (`headings` > 0: not ranked yet).
+  /// for an unknown heading (`headings` > 0: the descriptors cannot be rotated, see the message).
   [[nodiscard]] next_touch_ranking next_touch(std::span<const odometry> candidates,
                                               const next_touch_params& params = {}) const {
     if (!planar_)
       detail::fail("localizer::next_touch: headings = ", config_.headings,
-                   "; ranking moves needs a known heading (headings = 0) for now");
+                   "; ranking moves needs a known heading (headings = 0): the map's descriptors "
+                   "are of windows at the map's own orientation, and a touch predicted at "
+                   "another heading would have to be rendered and described again for every "
+                   "pair of hypotheses and move. Rank with a localizer of known heading (the "
+                   "arm's axes parallel to the map's), or choose the moves yourself");
     return detail::rank_planar_touches(*planar_, candidates, config_.confidence.radius_mm, params,
                                        "localizer::next_touch");
   }

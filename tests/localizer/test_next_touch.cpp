@@ -3,6 +3,7 @@
 // over a library of two maps that differ on one half only.
 #include <doctest/doctest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -15,7 +16,9 @@
 #include "tacmap/filter/next_touch.hpp"
 #include "tacmap/library_localizer.hpp"
 #include "tacmap/localizer.hpp"
+#include "tacmap/sim/calibration.hpp"
 #include "tacmap/sim/experiment.hpp"
+#include "tacmap/sim/library_experiment.hpp"
 #include "tacmap/sim/tactile_simulator.hpp"
 
 namespace test_next_touch {
@@ -244,6 +247,25 @@ TEST_CASE("localizer::next_touch ranks without changing the belief, and refuses 
   CHECK((loc.belief() == before).all());
 }
 
+TEST_CASE("next_touch with an unknown heading is refused, saying why and what to do") {
+  const auto map = half_textured(70, 90, 90, 5);
+  tacmap::localizer_config c;
+  c.headings = 8;
+  tacmap::localizer loc(map, scale, c);
+  const std::vector<tacmap::odometry> moves{{.dx_mm = 2.0}};
+  CHECK_THROWS_WITH_AS((void)loc.next_touch(std::span<const tacmap::odometry>(moves)),
+                       doctest::Contains("headings = 8; ranking moves needs a known heading"),
+                       std::invalid_argument);
+  CHECK_THROWS_WITH_AS((void)loc.next_touch(tacmap::touch_region{.x_max_mm = 2.0}),
+                       doctest::Contains("choose the moves yourself"), std::invalid_argument);
+  tacmap::localization_config active;
+  active.order = tacmap::touch_order::active;
+  active.headings = 8;
+  CHECK_THROWS_WITH_AS(active.validate(),
+                       doctest::Contains("order = active ranks moves with a known heading"),
+                       std::invalid_argument);
+}
+
 TEST_CASE("localizer::next_touch: a concentrated belief leaves little for any move to decide") {
   const auto& p = gecko();
   tacmap::localizer loc(p.map, p.mm_per_px);
@@ -314,7 +336,7 @@ TEST_CASE("next_touch over a library: a move to where the objects differ ranks f
                        std::invalid_argument);
 }
 
-TEST_CASE("the active touch order: chosen touches, reproducible, refused with faults") {
+TEST_CASE("the active touch order: chosen touches, reproducible, their states recorded") {
   const auto& p = gecko();
   tacmap::localization_config c;
   c.order = tacmap::touch_order::active;
@@ -338,16 +360,100 @@ TEST_CASE("the active touch order: chosen touches, reproducible, refused with fa
     if (a.touches[k].true_x_mm != q.touches[k].true_x_mm) ++elsewhere;
   }
   CHECK(elsewhere >= a.touches.size() - 2);
-
-  tacmap::localization_config faulty = c;
-  faulty.faults.outlier_probability = 0.1;
-  CHECK_THROWS_WITH_AS(tacmap::localization_experiment(p, faulty),
-                       doctest::Contains("order = active chooses where the sensor goes"),
-                       std::invalid_argument);
+  // The chosen touch's map state is its location (the first: the protocol's location index).
+  CHECK(a.touches[0].location == q.touches[0].location);
+  const auto& grid = active.filter().grid().base();
+  for (std::size_t k = 1; k < a.touches.size(); ++k) {
+    const auto at = grid.state_mm(static_cast<Eigen::Index>(a.touches[k].location));
+    CHECK(at(0) == doctest::Approx(a.touches[k].true_x_mm));
+    CHECK(at(1) == doctest::Approx(a.touches[k].true_y_mm));
+  }
   tacmap::localization_config none = c;
   none.active_candidates = 0;
   CHECK_THROWS_WITH_AS(tacmap::localization_experiment(p, none),
                        doctest::Contains("active_candidates = 0"), std::invalid_argument);
+}
+
+TEST_CASE("the active touch order with faults: each chosen move goes through them") {
+  const auto& p = gecko();
+  tacmap::localization_config c;
+  c.order = tacmap::touch_order::active;
+  c.active_candidates = 8;
+  c.faults.outlier_probability = 1.0;  // every move reported 8 mm off
+  c.faults.slip_touch = 4;
+  c.faults.slip_mm = 20.0;
+  tacmap::localization_experiment e(p, c);
+  const auto r = e.run(1);
+  REQUIRE(r.touches.size() == p.sequences[1].size());
+  const auto& grid = e.filter().grid().base();
+  for (std::size_t k = 1; k < r.touches.size(); ++k) {
+    const auto& t = r.touches[k];
+    CHECK(t.odometry_outlier);
+    CHECK(t.moved_unseen == (k == 3));
+    // Where the arm went: the chosen state, then the slip (the object moved 20 mm under it).
+    const auto target = grid.state_mm(static_cast<Eigen::Index>(t.location));
+    const double unseen = std::hypot(t.true_x_mm - target(0), t.true_y_mm - target(1));
+    CHECK(unseen == doctest::Approx(k == 3 ? 20.0 : 0.0).epsilon(1e-9));
+    // What the filter is told: the arm's move, off by the outlier (8 mm) and the noise.
+    const auto& before = r.touches[k - 1];
+    const double off = std::hypot(t.reported_dx_mm - (target(0) - before.true_x_mm),
+                                  t.reported_dy_mm - (target(1) - before.true_y_mm));
+    CHECK(off > 8.0 - 4.0 * p.odometry_sigma_mm - 1e-9);
+    CHECK(off < 8.0 + 4.0 * p.odometry_sigma_mm + 1e-9);
+  }
+  // Faults of the same sequence are drawn the same way each run.
+  const auto again = e.run(1);
+  for (std::size_t k = 0; k < r.touches.size(); ++k)
+    CHECK(again.touches[k].true_x_mm == r.touches[k].true_x_mm);
+  // Both orders of a sequence meet the same odometry errors (noise and outlier), pairwise.
+  tacmap::localization_config protocol_order = c;
+  protocol_order.order = tacmap::touch_order::protocol;
+  tacmap::localization_experiment pe(p, protocol_order);
+  const auto q = pe.run(1);
+  for (std::size_t k = 1; k < r.touches.size(); ++k) {
+    if (k == 3) continue;  // the slip: the true move is not the arm's
+    const auto error = [](const tacmap::touch_record& now, const tacmap::touch_record& before) {
+      return std::array<double, 2>{now.reported_dx_mm - (now.true_x_mm - before.true_x_mm),
+                                   now.reported_dy_mm - (now.true_y_mm - before.true_y_mm)};
+    };
+    const auto ea = error(r.touches[k], r.touches[k - 1]);
+    const auto ep = error(q.touches[k], q.touches[k - 1]);
+    CHECK(ea[0] == doctest::Approx(ep[0]));
+    CHECK(ea[1] == doctest::Approx(ep[1]));
+  }
+}
+
+TEST_CASE("library_experiment, active order: the library filter chooses where the objects differ") {
+  // Two objects alike but for the columns [0, 40) of 160: after a touch elsewhere the position
+  // may be known on both, the object is not. The library filter's next_touch goes where they
+  // differ; a filter of one object (what chose without the hooks) has no reason to.
+  const auto a = half_textured(90, 160, 160, 7);
+  auto b = a;
+  b.leftCols(40) = half_textured(90, 40, 40, 8);
+  const auto pa = tacmap::photo_touch_protocol(a, scale, 11, 5);
+  const auto pb = tacmap::photo_touch_protocol(b, scale, 12, 5);
+  tacmap::localization_config c;
+  c.order = tacmap::touch_order::active;
+  c.active_candidates = 16;
+  tacmap::library_experiment e({{"a", &pa}, {"b", &pb}}, c);
+  const double differ_mm = (40.0 + 9.0) * scale;  // a window centred left of this sees them
+  std::size_t first_elsewhere = 0, chose_differ = 0;
+  for (std::size_t q = 0; q < 6; ++q) {
+    const auto r = e.run(q % 2, q);
+    REQUIRE(r.touches.size() == 5);
+    REQUIRE(r.known_object.size() == 5);
+    for (std::size_t t = 0; t < r.touches.size(); ++t) {  // the same touches for both filters
+      CHECK(r.touches[t].true_x_mm == r.known_object[t].true_x_mm);
+      CHECK(r.touches[t].true_y_mm == r.known_object[t].true_y_mm);
+    }
+    if (r.touches[0].true_x_mm < differ_mm) continue;  // the first touch told them apart
+    ++first_elsewhere;
+    chose_differ += r.touches[1].true_x_mm < differ_mm ? 1U : 0U;
+    CHECK(r.recognized_at(3));
+  }
+  REQUIRE(first_elsewhere >= 3);
+  // A random candidate is there with probability about 1/3.
+  CHECK(chose_differ == first_elsewhere);
 }
 
 }  // namespace test_next_touch

@@ -27,6 +27,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -102,8 +103,10 @@ struct localization_config : localizer_config {
   std::size_t calibration_warmup = 0;
   /// Where the touches go (`touch_order`). Active: each sequence as long as the protocol's, the
   /// candidates drawn uniformly over the map's positions from the sequence's own stream of the
-  /// simulator seed (reproducible whatever sequences run), the odometry the true move plus the
-  /// protocol's noise (`touch_protocol::odometry_sigma_mm`) from the same stream.
+  /// simulator seed (reproducible whatever sequences run); each move's odometry error (the
+  /// protocol's noise, and the faults' `faults`) is that of the protocol's move at the same step,
+  /// so that both orders of a sequence meet the same errors (`carry_faults_to_move`,
+  /// sim/faults.hpp).
   touch_order order = touch_order::protocol;
   std::size_t active_candidates = 32;  ///< candidates per touch (active order)
   /// Active order: candidates are drawn at least this far from the previous touch (mm; 0: any).
@@ -126,11 +129,6 @@ struct localization_config : localizer_config {
             "localization_config: order = active ranks moves with a known heading, but "
             "headings = ",
             headings, "; use headings = 0 or the protocol's order");
-      if (faults.any())
-        detail::fail(
-            "localization_config: order = active chooses where the sensor goes, but "
-            "faults are set (they are drawn on the protocol's sequence); use the "
-            "protocol's order with faults");
     }
   }
 };
@@ -186,9 +184,11 @@ void spread_over_ring(Filter& filter, double radius_mm, double share) {
 
 /// What happened at one touch.
 struct touch_record {
-  std::size_t step = 0;      ///< 0-based position in the sequence (touch number - 1)
-  std::size_t location = 0;  ///< index of the touch location
-  double true_x_mm = 0.0;    ///< ground truth sensor centre
+  std::size_t step = 0;  ///< 0-based position in the sequence (touch number - 1)
+  /// Index of the touch location in the protocol; in the active order, after the first touch,
+  /// the map state (planar_grid index) chosen — before any slip or kidnap moved it.
+  std::size_t location = 0;
+  double true_x_mm = 0.0;  ///< ground truth sensor centre
   double true_y_mm = 0.0;
   double map_x_mm = 0.0;  ///< the belief's most probable state after this touch
   double map_y_mm = 0.0;
@@ -253,6 +253,16 @@ struct sequence_result {
   /// a rejected frame), filled only when asked for (`keep_log_likelihoods`): what a calibration
   /// replays with other likelihood scales (sim/calibration.hpp).
   std::vector<Eigen::Array<float, Eigen::Dynamic, 1>> log_likelihoods;
+};
+
+/// What a caller of `basic_localization_experiment::run` can take over, so that another filter
+/// on the same touches chooses where they go (`library_experiment`'s active order): `rank`
+/// ranks the active order's candidate moves instead of the experiment's own filter, and
+/// `touched` sees each touch as soon as it is made (its record and its frame, as
+/// `sequence_result` keeps them), before the next one is chosen. Either may be empty.
+struct touch_hooks {
+  std::function<next_touch_ranking(std::span<const odometry>)> rank;
+  std::function<void(const touch_record&, const tactile_frame&)> touched;
 };
 
 /// First touch (1-based) from which every error is below `threshold_mm`; empty when the last
@@ -365,8 +375,10 @@ class basic_localization_experiment {
   /// Replays sequence `index` of the protocol. `keep_images`: also return every preprocessed
   /// tactile image and belief image; `keep_log_likelihoods`: every touch's log-likelihood over
   /// the states. Throws std::invalid_argument for an index out of range.
+  /// `hooks` (optional): another filter choosing the active order's touches (`touch_hooks`).
   [[nodiscard]] sequence_result run(std::size_t index, bool keep_images = false,
-                                    bool keep_log_likelihoods = false) {
+                                    bool keep_log_likelihoods = false,
+                                    const touch_hooks& hooks = {}) {
     if (index >= protocol_->sequences.size())
       detail::fail("localization_experiment::run: sequence ", index,
                    " does not exist; expected 0 .. ",
@@ -381,9 +393,9 @@ class basic_localization_experiment {
     polarity_setup& v = *variants_[dark ? 1 : 0];
     sequence_result result;
     if (v.filter)
-      result = run_on(*v.filter, v, index, keep_images, keep_log_likelihoods);
+      result = run_on(*v.filter, v, index, keep_images, keep_log_likelihoods, hooks);
     else if constexpr (localizes_headings<Measurement>)
-      result = run_on(*v.pose_filter, v, index, keep_images, keep_log_likelihoods);
+      result = run_on(*v.pose_filter, v, index, keep_images, keep_log_likelihoods, hooks);
     result.raised_dark = dark;
     return result;
   }
@@ -429,7 +441,7 @@ class basic_localization_experiment {
 
   template <class Filter>
   sequence_result run_on(Filter& filter, const polarity_setup& v, std::size_t index,
-                         bool keep_images, bool keep_log_likelihoods) {
+                         bool keep_images, bool keep_log_likelihoods, const touch_hooks& hooks) {
     constexpr bool pose = Filter::grid_type::dimension == 3;
     const touch_sequence& sequence = protocol_->sequences[index];
     // Each sequence gets its own noise stream, fixed by (seed, index): runs are reproducible
@@ -501,23 +513,34 @@ class basic_localization_experiment {
     filter.reset();
     sequence_result result;
     result.sequence = index;
-    // The active order's stream: candidates and odometry noise, its own per sequence.
+    // The active order's stream of candidates, its own per sequence.
     sim_rng active_rng(scenario_seed(config_.simulator_seed ^ 0x2545F4914F6CDD1DULL, index));
+    // Its slip's direction when the protocol's does not fit (`carry_faults_to_move`).
+    sim_rng active_fault_rng(scenario_seed(
+        config_.simulator_seed ^ 0x94D049BB133111EBULL ^ 0x2545F4914F6CDD1DULL, index));
+    // Which touches a fault came before: the protocol's sequence's, or the active order's.
+    std::vector<char> outlier = faulted.outlier;
+    std::vector<char> unseen(sequence.size(), 0);  // a slip or kidnap before the touch
+    if (faulted.slipped) unseen[config_.faults.slip_touch - 1] = 1;
+    if (faulted.kidnapped) unseen[config_.faults.kidnap_touch - 1] = 1;
     touch_location previous{};
     std::size_t updates = 0;  // accepted touches so far
     for (std::size_t step = 0; step < sequence.size(); ++step) {
       const protocol_step& st = sequence[step];
       touch_location truth = faulted.truth[step];
       odometry reported = faulted.reported[step];
+      std::size_t location = st.location;
       if constexpr (!pose) {
         if (config_.order == touch_order::active && step > 0) {
-          truth = choose_next_touch(filter, previous, active_rng);
-          const double sigma = protocol_->odometry_sigma_mm;
-          reported.dx_mm = truth.x_mm - previous.x_mm;
-          reported.dy_mm = truth.y_mm - previous.y_mm;
-          const double nx = active_rng.normal(), ny = active_rng.normal();
-          reported.dx_mm += sigma * nx;
-          reported.dy_mm += sigma * ny;
+          const auto [target, state] = choose_next_touch(filter, previous, active_rng, hooks);
+          location = static_cast<std::size_t>(state);
+          const faulted_move m =
+              carry_faults_to_move(*protocol_, sequence, faulted, config_.faults, step, previous,
+                                   target, filter.grid().base(), active_fault_rng);
+          truth = m.truth;
+          reported = m.reported;
+          outlier[step] = m.outlier ? 1 : 0;
+          unseen[step] = m.slipped || m.kidnapped ? 1 : 0;
         }
       }
       previous = truth;
@@ -541,8 +564,8 @@ class basic_localization_experiment {
         if (f.oracle == fault_oracle::transition)
           detail::spread_over_ring(filter, f.outlier_mm, f.outlier_probability);
         if (f.oracle == fault_oracle::told) {
-          if (faulted.outlier[step] != 0) detail::spread_over_ring(filter, f.outlier_mm, 1.0);
-          if (faulted.slipped && step + 1 == f.slip_touch)
+          if (outlier[step] != 0) detail::spread_over_ring(filter, f.outlier_mm, 1.0);
+          if (unseen[step] != 0 && step + 1 == f.slip_touch)
             detail::spread_over_ring(filter, f.slip_mm, 1.0);
         }
       };
@@ -601,16 +624,15 @@ class basic_localization_experiment {
       const preprocessed_frame pre = preprocess(frame, config_.preprocessing);
       touch_record rec;
       rec.step = step;
-      rec.location = config_.order == touch_order::active && step > 0 ? 0 : st.location;
+      rec.location = location;
       rec.true_x_mm = truth.x_mm;
       rec.true_y_mm = truth.y_mm;
       if (step > 0) {
         rec.reported_dx_mm = reported.dx_mm;
         rec.reported_dy_mm = reported.dy_mm;
       }
-      rec.odometry_outlier = faulted.outlier[step] != 0;
-      rec.moved_unseen = (faulted.slipped && step + 1 == config_.faults.slip_touch) ||
-                         (faulted.kidnapped && step + 1 == config_.faults.kidnap_touch);
+      rec.odometry_outlier = outlier[step] != 0;
+      rec.moved_unseen = unseen[step] != 0;
       rec.lost_track = lost_track;
       rec.accepted = pre.accepted();
       rec.rejection = pre.rejection;
@@ -657,6 +679,7 @@ class basic_localization_experiment {
       rec.entropy_nats = est.entropy_nats;
       rec.appearance_probability = est.hypothesis_probability;
       result.touches.push_back(rec);
+      if (hooks.touched) hooks.touched(rec, frame);
       if (keep_images) {
         result.tactile_images.push_back(rec.accepted ? pre.pixels : image<float>{});
         result.beliefs.push_back(position_belief(filter));
@@ -668,28 +691,34 @@ class basic_localization_experiment {
 
   // The active order's next location: `active_candidates` positions drawn over the map's
   // states, ranked by `next_touch` as moves from `from` (the true location of the previous
-  // touch: the arm knows where it moves), the best taken.
+  // touch: the arm knows where it moves), the best taken; by `hooks.rank` when given.
   template <class Filter>
-  touch_location choose_next_touch(const Filter& filter, const touch_location& from,
-                                   sim_rng& rng) const {
+  std::pair<touch_location, Eigen::Index> choose_next_touch(const Filter& filter,
+                                                            const touch_location& from,
+                                                            sim_rng& rng,
+                                                            const touch_hooks& hooks) const {
     const auto& grid = filter.grid().base();
     std::vector<touch_location> places;
+    std::vector<Eigen::Index> states;
     std::vector<odometry> moves;
     for (std::size_t k = 0, tries = 0; k < config_.active_candidates; ++tries) {
-      const auto s = grid.state_mm(
-          static_cast<Eigen::Index>(rng.below(static_cast<std::uint64_t>(grid.size()))));
+      const auto q = static_cast<Eigen::Index>(rng.below(static_cast<std::uint64_t>(grid.size())));
+      const auto s = grid.state_mm(q);
       // Far enough from the previous touch (after 100 draws per candidate: anywhere).
       if (std::hypot(s(0) - from.x_mm, s(1) - from.y_mm) < config_.active_min_move_mm &&
           tries < 100 * config_.active_candidates)
         continue;
       ++k;
       places.push_back({s(0), s(1)});
+      states.push_back(q);
       moves.push_back({.dx_mm = s(0) - from.x_mm, .dy_mm = s(1) - from.y_mm});
     }
-    const next_touch_ranking r = detail::rank_planar_touches(
-        filter, std::span<const odometry>(moves), config_.confidence.radius_mm, config_.next_touch,
-        "localization_experiment (active order)");
-    return places[r.best()];
+    const next_touch_ranking r =
+        hooks.rank ? hooks.rank(std::span<const odometry>(moves))
+                   : detail::rank_planar_touches(filter, std::span<const odometry>(moves),
+                                                 config_.confidence.radius_mm, config_.next_touch,
+                                                 "localization_experiment (active order)");
+    return {places[r.best()], states[r.best()]};
   }
 
   // Seeds of the scenario's draws: stream 0 for the camera map, index + 1 for sequence index;

@@ -186,6 +186,55 @@ struct faulted_sequence {
   return out;
 }
 
+/// One move of a sequence whose touches are chosen while it runs (the active order) after the
+/// faults: where the touch really is and what odometry the filter is told.
+struct faulted_move {
+  touch_location truth;
+  odometry reported;
+  bool outlier = false;    ///< the reported move is an outlier
+  bool slipped = false;    ///< the object slipped before this touch
+  bool kidnapped = false;  ///< the sensor was put down elsewhere for this touch
+};
+
+/// `apply_faults`'s faults carried over to one move of a sequence whose touches are chosen while
+/// it runs (the active order), so that both orders of a sequence meet the same faults and compare
+/// pairwise: the arm moves from the true location `from` to `target` (a place on the object,
+/// chosen where the object now lies), touch `t` (0-based, >= 1) of `sequence` whose faulted
+/// version is `faulted`. The reported move is the true one plus the protocol's error for move t
+/// (`faulted.reported[t]` minus the true move: its noise and outlier); at the slip's touch the
+/// object moves by the protocol's slip offset (when that leaves `target` off `positions`, a
+/// direction that keeps it on is drawn from `rng`, 200 draws at most, else no slip); at the
+/// kidnap's touch the sensor lands where the protocol's did.
+[[nodiscard]] inline faulted_move carry_faults_to_move(
+    const touch_protocol& protocol, const touch_sequence& sequence, const faulted_sequence& faulted,
+    const exploration_faults& faults, std::size_t t, const touch_location& from,
+    const touch_location& target, const planar_grid<float>& positions, sim_rng& rng) {
+  faulted_move out{target, {target.x_mm - from.x_mm, target.y_mm - from.y_mm}};
+  out.reported.dx_mm += faulted.reported[t].dx_mm - sequence[t].true_motion.dx_mm;
+  out.reported.dy_mm += faulted.reported[t].dy_mm - sequence[t].true_motion.dy_mm;
+  out.outlier = faulted.outlier[t] != 0;
+  if (faulted.slipped && faults.slip_touch == t + 1) {
+    const touch_location& was = protocol.locations.at(sequence[t].location);
+    double ox = faulted.truth[t].x_mm - was.x_mm, oy = faulted.truth[t].y_mm - was.y_mm;
+    const double pi = std::numbers::pi;
+    for (int attempt = 0;
+         attempt < 200 && !positions.nearest_state(target.x_mm + ox, target.y_mm + oy); ++attempt) {
+      const double a = 2.0 * pi * rng.uniform();
+      ox = faults.slip_mm * std::cos(a);
+      oy = faults.slip_mm * std::sin(a);
+    }
+    if (positions.nearest_state(target.x_mm + ox, target.y_mm + oy)) {
+      out.truth = {target.x_mm + ox, target.y_mm + oy};
+      out.slipped = true;
+    }
+  }
+  if (faulted.kidnapped && faults.kidnap_touch == t + 1) {
+    out.truth = faulted.truth[t];
+    out.kidnapped = true;
+  }
+  return out;
+}
+
 /// Whether the estimate is back within `threshold_mm` of the truth within `touches` touches of
 /// touch `from` (1-based) and stays there to the end: some touch in [from, from + touches]
 /// after which every error is below the threshold.

@@ -153,11 +153,35 @@ class library_experiment {
   /// object or sequence out of range.
   [[nodiscard]] library_sequence_result run(std::size_t object, std::size_t sequence) {
     check_object(object);
+    const auto same = [](Eigen::Index k) { return static_cast<std::size_t>(k); };
+    if (config_.order == touch_order::active) {
+      // The library filter chooses each next touch (`next_touch` over objects and positions,
+      // among candidates drawn on the touched object: the arm knows where the object is, not
+      // which it is), so it runs touch by touch beside the simulation; the object's own filter
+      // sees the same touches.
+      library_sequence_result out;
+      out.object = object;
+      out.sequence = sequence;
+      out.raised_dark = raised_dark(object);
+      library_localizer_filter& f = *filter_;
+      f.reset();
+      open_set unknown(config_.open_set);
+      touch_hooks hooks;
+      hooks.rank = [&](std::span<const odometry> moves) {
+        return detail::rank_library_touches(f, moves, config_.confidence.radius_mm,
+                                            config_.next_touch,
+                                            "library_experiment (active order)");
+      };
+      hooks.touched = [&](const touch_record& rec, const tactile_frame& frame) {
+        replay_touch(f, unknown, rec, frame, config_.preprocessing, out, same);
+      };
+      out.known_object = experiments_[object]->run(sequence, false, false, hooks).touches;
+      return out;
+    }
     // The touched object's simulation (frames, truth, odometry) and its own filter's run.
     sequence_result single = experiments_[object]->run(sequence, true);
     library_sequence_result out = start(object, sequence, single);
-    replay(*filter_, single, config_.preprocessing, out,
-           [](Eigen::Index k) { return static_cast<std::size_t>(k); });
+    replay(*filter_, single, config_.preprocessing, out, same);
     return out;
   }
 
@@ -246,97 +270,105 @@ class library_experiment {
   template <class Filter, class ObjectOf>
   void replay(Filter& f, const sequence_result& single, const preprocess_params& pp,
               library_sequence_result& out, ObjectOf&& object_of) const {
-    constexpr bool library = library_state_grid<typename Filter::grid_type>;
     f.reset();
     open_set unknown(config_.open_set);
+    for (std::size_t t = 0; t < single.touches.size(); ++t)
+      replay_touch(f, unknown, single.touches[t], single.frames[t], pp, out, object_of);
+  }
+
+  // One touch of `replay` (its record `touch` and frame), appended to `out`.
+  template <class Filter, class ObjectOf>
+  void replay_touch(Filter& f, open_set& unknown, const touch_record& touch,
+                    const tactile_frame& frame, const preprocess_params& pp,
+                    library_sequence_result& out, ObjectOf&& object_of) const {
+    constexpr bool library = library_state_grid<typename Filter::grid_type>;
     const std::size_t object = out.object;
-    for (std::size_t t = 0; t < single.touches.size(); ++t) {
-      touch_record rec = single.touches[t];
-      rec.lost_track = false;
-      if (t > 0) {
-        try {
-          f.predict({.dx_mm = rec.reported_dx_mm, .dy_mm = rec.reported_dy_mm});
-        } catch (const std::domain_error&) {
-          f.reset();
-          unknown.reset();
-          rec.lost_track = true;
-        }
+    const std::size_t t = touch.step;
+    touch_record rec = touch;
+    rec.lost_track = false;
+    if (t > 0) {
+      try {
+        f.predict({.dx_mm = rec.reported_dx_mm, .dy_mm = rec.reported_dy_mm});
+      } catch (const std::domain_error&) {
+        f.reset();
+        unknown.reset();
+        rec.lost_track = true;
       }
-      const preprocessed_frame pre = preprocess(single.frames[t], pp);
-      rec.accepted = pre.accepted();
-      rec.rejection = pre.rejection;
-      std::optional<update_report> report;
-      double log_factor = 0.0;
-      if (pre.accepted()) {
-        const auto z = [&] {
-          if constexpr (library)
-            return std::vector<image<float>>{pre.pixels};
-          else
-            return pre.pixels;
-        }();
-        try {
-          report = f.update(z);
-        } catch (const std::domain_error&) {
-          f.reset();
-          unknown.reset();
-          rec.lost_track = true;
-          report = f.update(z);
-        }
-        rec.log_marginal_likelihood = report->log_marginal_likelihood();
-        rec.log_prediction_support = report->log_prediction_support;
-        rec.contradicted = report->log_prediction_support < config_.confidence.contradiction;
-        double fraction = 1.0;
-        if constexpr (library) {
-          Eigen::Index evaluated_states = 0;
-          const auto& evaluated = f.measurement_model().evaluated();
-          for (Eigen::Index k = 0; k < f.grid().objects(); ++k)
-            if (evaluated[static_cast<std::size_t>(k)]) evaluated_states += f.grid().object_size(k);
-          fraction = static_cast<double>(evaluated_states) / static_cast<double>(f.grid().size());
-        }
-        const double before = unknown.log_odds();
-        unknown.observe(*report, fraction);
-        log_factor = before - unknown.log_odds();
-      }
-      const auto est = f.estimate();
-      const confidence conf = assess(f, est, config_.confidence);
-      std::size_t decided = object_of(0);
-      std::vector<double> p(objects_.size(), 0.0);
-      if constexpr (library) {
-        decided = object_of(est.map_object);
-        for (std::size_t k = 0; k < est.object_probability.size(); ++k)
-          p[object_of(static_cast<Eigen::Index>(k))] = est.object_probability[k];
-      } else {
-        p[decided] = 1.0;
-      }
-      rec.probability_within = conf.probability_within;
-      rec.verdict = conf.verdict;
-      rec.estimate_x_mm = conf.centre_mm(0);
-      rec.estimate_y_mm = conf.centre_mm(1);
-      rec.map_x_mm = est.map_mm(0);
-      rec.map_y_mm = est.map_mm(1);
-      const double inf = std::numeric_limits<double>::infinity();
-      rec.error_mm = decided == object ? std::hypot(rec.estimate_x_mm - rec.true_x_mm,
-                                                    rec.estimate_y_mm - rec.true_y_mm)
-                                       : inf;
-      rec.map_error_mm =
-          decided == object ? std::hypot(rec.map_x_mm - rec.true_x_mm, rec.map_y_mm - rec.true_y_mm)
-                            : inf;
-      rec.entropy_nats = est.entropy_nats;
-      rec.appearance_probability = est.hypothesis_probability;
-      const double pu = unknown.probability_unknown();
-      out.touches.push_back(rec);
-      out.object_probability.push_back(p);
-      out.decided.push_back(decided);
-      out.probability_unknown.push_back(pu);
-      out.log_open_set_factor.push_back(log_factor);
-      out.open_set_verdict.push_back(with_open_set(conf, pu, config_.confidence).verdict);
-      std::size_t evaluated = 1;
-      if constexpr (library) {
-        evaluated = 0;
-        for (const bool e : f.measurement_model().evaluated()) evaluated += e ? 1U : 0U;
-      }
-      out.evaluated_objects.push_back(report ? evaluated : 0U);
     }
+    const preprocessed_frame pre = preprocess(frame, pp);
+    rec.accepted = pre.accepted();
+    rec.rejection = pre.rejection;
+    std::optional<update_report> report;
+    double log_factor = 0.0;
+    if (pre.accepted()) {
+      const auto z = [&] {
+        if constexpr (library)
+          return std::vector<image<float>>{pre.pixels};
+        else
+          return pre.pixels;
+      }();
+      try {
+        report = f.update(z);
+      } catch (const std::domain_error&) {
+        f.reset();
+        unknown.reset();
+        rec.lost_track = true;
+        report = f.update(z);
+      }
+      rec.log_marginal_likelihood = report->log_marginal_likelihood();
+      rec.log_prediction_support = report->log_prediction_support;
+      rec.contradicted = report->log_prediction_support < config_.confidence.contradiction;
+      double fraction = 1.0;
+      if constexpr (library) {
+        Eigen::Index evaluated_states = 0;
+        const auto& evaluated = f.measurement_model().evaluated();
+        for (Eigen::Index k = 0; k < f.grid().objects(); ++k)
+          if (evaluated[static_cast<std::size_t>(k)]) evaluated_states += f.grid().object_size(k);
+        fraction = static_cast<double>(evaluated_states) / static_cast<double>(f.grid().size());
+      }
+      const double before = unknown.log_odds();
+      unknown.observe(*report, fraction);
+      log_factor = before - unknown.log_odds();
+    }
+    const auto est = f.estimate();
+    const confidence conf = assess(f, est, config_.confidence);
+    std::size_t decided = object_of(0);
+    std::vector<double> p(objects_.size(), 0.0);
+    if constexpr (library) {
+      decided = object_of(est.map_object);
+      for (std::size_t k = 0; k < est.object_probability.size(); ++k)
+        p[object_of(static_cast<Eigen::Index>(k))] = est.object_probability[k];
+    } else {
+      p[decided] = 1.0;
+    }
+    rec.probability_within = conf.probability_within;
+    rec.verdict = conf.verdict;
+    rec.estimate_x_mm = conf.centre_mm(0);
+    rec.estimate_y_mm = conf.centre_mm(1);
+    rec.map_x_mm = est.map_mm(0);
+    rec.map_y_mm = est.map_mm(1);
+    const double inf = std::numeric_limits<double>::infinity();
+    rec.error_mm = decided == object ? std::hypot(rec.estimate_x_mm - rec.true_x_mm,
+                                                  rec.estimate_y_mm - rec.true_y_mm)
+                                     : inf;
+    rec.map_error_mm = decided == object
+                           ? std::hypot(rec.map_x_mm - rec.true_x_mm, rec.map_y_mm - rec.true_y_mm)
+                           : inf;
+    rec.entropy_nats = est.entropy_nats;
+    rec.appearance_probability = est.hypothesis_probability;
+    const double pu = unknown.probability_unknown();
+    out.touches.push_back(rec);
+    out.object_probability.push_back(p);
+    out.decided.push_back(decided);
+    out.probability_unknown.push_back(pu);
+    out.log_open_set_factor.push_back(log_factor);
+    out.open_set_verdict.push_back(with_open_set(conf, pu, config_.confidence).verdict);
+    std::size_t evaluated = 1;
+    if constexpr (library) {
+      evaluated = 0;
+      for (const bool e : f.measurement_model().evaluated()) evaluated += e ? 1U : 0U;
+    }
+    out.evaluated_objects.push_back(report ? evaluated : 0U);
   }
 
   std::vector<library_object> objects_;
