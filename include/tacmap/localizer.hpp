@@ -1785,6 +1785,10 @@ using descriptor_localizer = basic_localizer<descriptor_measurement<D>, Headings
 #include "tacmap/precompiled.hpp"
 #ifdef TACMAP_EXTERN_TEMPLATE
 namespace tacmap {
+TACMAP_EXTERN_FILTER_CORE(latent_grid<planar_grid<float>>,
+                          robust_motion<latent_motion<odometry_gaussian>>);
+TACMAP_EXTERN_FILTER_CORE(latent_grid<pose_grid<float>>,
+                          robust_motion<latent_motion<pose_odometry_gaussian>>);
 TACMAP_EXTERN_FILTER(latent_grid<planar_grid<float>>,
                      robust_motion<latent_motion<odometry_gaussian>>,
                      appearance_likelihood<configured_measurement>);
