@@ -1356,9 +1356,10 @@ class descriptor_measurement {
 /// `localizer_config::headings` > 0 (unknown heading) can be chosen at run time. A compile-time
 /// choice because that filter (the policy's rotated model, the pose motion, every step over
 /// them) is compiled in every translation unit that builds the localizer, used or not:
-/// `tacmap::precompiled` holds it for `localizer`, not for a descriptor of your own, where it
-/// was a fifth of the translation unit's compile time (g++ 12 -O2, CPU: 24 s planar only, 31 s
-/// with it; bench/compile_time/).
+/// `tacmap::precompiled` holds it for `localizer`, and for a descriptor of your own the part
+/// that does not depend on it (the filter's `detail::filter_core`), not the rotated model: with
+/// it linked, the translation unit takes about a fifth more (g++ 12 -O2, CPU, medians of 3 on a
+/// loaded machine: 17.8 s planar only, 21.5 s with it; bench/compile_time/).
 enum class heading_support {
   known,      ///< the planar filter only; `headings` > 0 is refused, naming this setting
   localized,  ///< both filters (the policy needs P1: a pose model); `headings` at run time
@@ -1792,6 +1793,10 @@ using descriptor_localizer = basic_localizer<descriptor_measurement<D>, Headings
 #include "tacmap/precompiled.hpp"
 #ifdef TACMAP_EXTERN_TEMPLATE
 namespace tacmap {
+TACMAP_EXTERN_FILTER_CORE(latent_grid<planar_grid<float>>,
+                          robust_motion<latent_motion<odometry_gaussian>>);
+TACMAP_EXTERN_FILTER_CORE(latent_grid<pose_grid<float>>,
+                          robust_motion<latent_motion<pose_odometry_gaussian>>);
 TACMAP_EXTERN_FILTER(latent_grid<planar_grid<float>>,
                      robust_motion<latent_motion<odometry_gaussian>>,
                      appearance_likelihood<configured_measurement>);

@@ -250,22 +250,25 @@ concept measures_given_prediction = requires(const M& m, const G& g,
 };
 }  // namespace detail
 
-/// The recursive Bayes filter over `Grid`, with the `Motion` and `Measurement` policies.
-/// The belief's precision is `Grid::scalar_type` (float or double).
-template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
-class bayes_filter {
+namespace detail {
+/// What `bayes_filter` does that does not depend on its measurement model: the belief, the
+/// prediction, the estimate and its statistics, applying a log-likelihood and tracking's
+/// search. A base of its own, so that one instantiation serves every measurement model over
+/// the same grid and motion: `tacmap::precompiled` holds the localizers' (precompiled.hpp), and
+/// a localizer with a user's descriptor compiles only what depends on that descriptor. Its
+/// public members are `bayes_filter`'s (documented here).
+template <state_grid Grid, motion_model<Grid> Motion>
+class filter_core {
  public:
   using grid_type = Grid;
   using motion_type = Motion;
-  using measurement_model_type = Measurement;
   using scalar_type = typename Grid::scalar_type;
   using belief_type = belief_array<Grid>;
   using control_type = typename Motion::control_type;
-  using measurement_type = typename Measurement::measurement_type;
   using estimate_type = state_estimate<Grid::dimension>;
 
   /// A filter with a uniform initial belief.
-  bayes_filter(Grid grid, Motion motion, Measurement measurement);
+  filter_core(Grid grid, Motion motion);
 
   /// Back to the uniform belief (no knowledge of where the sensor is). Over a `library_grid`:
   /// each object's prior (`object_prior()`) spread evenly over its states.
@@ -283,7 +286,7 @@ class bayes_filter {
     }
   }
 
- private:
+ protected:
   // Tracking: after a tracked update, boxes on the belief image (every layer's states united)
   // holding its support, and a bound on the mass outside them (what the next predict may leave
   // in place); after a windowed predict (`moved`), the boxes where that mass now is, which the
@@ -310,7 +313,7 @@ class bayes_filter {
   /// or of `s`, a `restore_state`, or a save into `s` by another filter makes the next save a
   /// whole copy again. No allocation after the first save.
   class saved_state {
-    friend class bayes_filter;
+    friend class filter_core;
 
    public:
     /// The belief as it was saved (e.g. before a touch's prediction).
@@ -399,12 +402,6 @@ class bayes_filter {
   /// at the grid's edge).
   prediction_report predict(const control_type& u);
 
-  /// Measurement update with measurement `z`, through the measurement model. With tracking on
-  /// (`set_tracking`) and a model with the tracking hook (measurement/concept.hpp), only the
-  /// predicted belief's support is evaluated when that is exact to the stated tolerance; the
-  /// report's `path` says which ran.
-  update_report update(const measurement_type& z);
-
   /// Turns tracking mode on (epsilon > 0) or off (epsilon = 0): see `tracking_params` for what
   /// it evaluates and the bound on the error it guarantees. Throws std::invalid_argument for
   /// parameters out of range (naming the value), the filter unchanged. Models without the
@@ -415,39 +412,6 @@ class bayes_filter {
     region_.reset();
   }
   [[nodiscard]] const tracking_params& tracking() const { return tracking_; }
-
-  /// Runs the measurement model's whole-grid operations on the executor `e`
-  /// (tacmap/executor/concept.hpp): `thread_pool_executor`, `tbb_executor` or the user's own,
-  /// which must outlive its use; an empty `executor_ref` goes back to sequential. For models
-  /// that accept one (`descriptor_likelihood::set_executor`: the same values bit for bit).
-  void set_executor(executor_ref e) requires requires(Measurement& m) { m.set_executor(e); }
-  { measurement_.set_executor(e); }
-
-  /// Measurement update with a log-likelihood computed elsewhere: a flat array of `size()`
-  /// values, or an image of `rows() x cols()` for single-layer grids.
-  template <class Derived>
-  update_report update_log_likelihood(const Eigen::DenseBase<Derived>& log_likelihood) {
-    const Eigen::Index n = grid_.size();
-    if (log_likelihood.rows() == n && log_likelihood.cols() == 1) {
-      log_likelihood_ = log_likelihood.derived().template cast<scalar_type>();
-    } else if (log_likelihood.rows() == grid_.rows() && log_likelihood.cols() == grid_.cols() &&
-               n == grid_.rows() * grid_.cols()) {
-      Eigen::Map<image<scalar_type>>(log_likelihood_.data(), grid_.rows(), grid_.cols()) =
-          log_likelihood.derived().template cast<scalar_type>();
-    } else {
-      detail::fail("bayes_filter::update_log_likelihood: log-likelihood is ", log_likelihood.rows(),
-                   " x ", log_likelihood.cols(), "; expected ", n,
-                   " x 1 (one value per state) or the belief image ", grid_.rows(), " x ",
-                   grid_.cols());
-    }
-    return apply_log_likelihood(log_likelihood_, "the given log-likelihood");
-  }
-
-  /// Predict with `u`, then update with `z` (one step of Table 1).
-  update_report step(const control_type& u, const measurement_type& z) {
-    predict(u);
-    return update(z);
-  }
 
   /// The belief, one probability per state (sums to 1).
   [[nodiscard]] const belief_type& belief() const { return belief_; }
@@ -473,16 +437,7 @@ class bayes_filter {
   /// probability — that object and within the radius. Throws std::invalid_argument for a
   /// non-finite centre or a radius that is negative or not finite.
   [[nodiscard]] double probability_within(const Eigen::Vector2d& center_mm, double radius_mm) const
-      requires(Grid::dimension >= 2) {
-    if (!center_mm.allFinite())
-      detail::fail("bayes_filter::probability_within: centre (", center_mm(0), ", ", center_mm(1),
-                   ") mm; expected finite map coordinates");
-    if (!(std::isfinite(radius_mm) && radius_mm >= 0.0))
-      detail::fail("bayes_filter::probability_within: radius ", radius_mm,
-                   " mm; expected a finite radius >= 0");
-    const Eigen::Index k = leading_block();
-    return stats_[static_cast<std::size_t>(k)].probability_within(block(k), center_mm, radius_mm);
-  }
+      requires(Grid::dimension >= 2);
 
   /// The position whose disc of `radius_mm` holds the most belief (x, y; whatever the heading
   /// or latent hypothesis: the belief's mean inside the best disc of the lattice), and the mass
@@ -496,16 +451,7 @@ class bayes_filter {
   /// joint probability (that object and within the radius). Uses scratch kept in the filter:
   /// not for concurrent calls on one filter (like every other member).
   [[nodiscard]] std::pair<Eigen::Vector2d, double> most_probable_disc(double radius_mm) const
-      requires(Grid::dimension >= 2) {
-    if (!(std::isfinite(radius_mm) && radius_mm >= 0.0))
-      detail::fail("bayes_filter::most_probable_disc: radius ", radius_mm,
-                   " mm; expected a finite radius >= 0");
-    if constexpr (summary_grid)
-      if (summarised()) return stats_[0].most_probable_disc_summarised(grid_, radius_mm);
-    const Eigen::Index k = leading_block();
-    return stats_[static_cast<std::size_t>(k)].most_probable_disc(statistics_grid(k), block(k),
-                                                                  radius_mm);
-  }
+      requires(Grid::dimension >= 2);
 
   /// True when the grid's positions form an axis-aligned regular lattice (planar_grid,
   /// pose_grid): what `most_probable_disc` needs. Library grids: the most probable object's.
@@ -535,11 +481,9 @@ class bayes_filter {
 
   [[nodiscard]] const Grid& grid() const { return grid_; }
   [[nodiscard]] const Motion& motion() const { return motion_; }
-  [[nodiscard]] const Measurement& measurement_model() const { return measurement_; }
   [[nodiscard]] Motion& motion() { return motion_; }
-  [[nodiscard]] Measurement& measurement_model() { return measurement_; }
 
- private:
+ protected:
   using statistics_grid_type = typename detail::statistics_grid<Grid>::type;
   using statistics_type = detail::position_statistics<statistics_grid_type>;
 
@@ -592,51 +536,19 @@ class bayes_filter {
 
   // bel = eta * exp(ll - max ll) * bel_bar. Subtracting the maximum first means the best state's
   // factor is exactly 1, so no likelihood underflows to an all-zero posterior by itself.
-  update_report apply_log_likelihood(const belief_type& ll, const char* source) {
-    const auto scan = detail::scan_log_likelihood(ll.data(), ll.size());
-    if (scan.first_nan >= 0)
-      detail::fail<std::domain_error>("bayes_filter::update: ", source, " is NaN at state ",
-                                      scan.first_nan,
-                                      "; expected finite log-likelihoods (or -infinity for "
-                                      "excluded states). The belief is unchanged");
-    const scalar_type top = scan.max;
-    if (top == std::numeric_limits<scalar_type>::infinity())
-      detail::fail<std::domain_error>("bayes_filter::update: ", source,
-                                      " contains +infinity; expected finite log-likelihoods. "
-                                      "The belief is unchanged");
-    if (top == -std::numeric_limits<scalar_type>::infinity())
-      detail::fail<std::domain_error>("bayes_filter::update: ", source,
-                                      " is -infinity everywhere (it rules out every state); "
-                                      "expected at least one finite value. The belief is "
-                                      "unchanged");
-    const detail::weight_sums sums =
-        detail::weight_by_likelihood(belief_.data(), ll.data(), top, scratch_.data(), ll.size());
-    const double total = sums.posterior;
-    if (!(total > 0.0) || !std::isfinite(total))
-      detail::fail<contradiction_error>(
-          "bayes_filter::update: ", source, " gives zero probability to every state the belief ",
-          "still allows (posterior sum ", total,
-          "); the measurement contradicts the prediction. "
-          "The belief is unchanged; call reset() to start again from a uniform belief");
-    normalise(scratch_, total);
-    changed_all();
-    belief_.swap(scratch_);
-    region_.reset();
-    // sums.likelihood >= 1 (the maximum's own factor), so the logarithm is finite.
-    const double log_evidence = std::log(total);
-    return {.log_evidence = log_evidence,
-            .log_likelihood_max = static_cast<double>(top),
-            .log_prediction_support =
-                log_evidence - std::log(sums.likelihood) + std::log(static_cast<double>(ll.size())),
-            .evaluated_states = ll.size()};
-  }
+  update_report apply_log_likelihood(const belief_type& ll, const char* source);
 
   // The tracked update (see tracking_params), or the reason it did not run (the caller then
   // updates the whole grid): update_path::tracked with the report filled, else the fallback.
+  // `bound`: the model's `log_likelihood_bound()`; `evaluate` runs its `log_likelihood_on`
+  // into `log_likelihood_` (one call per update: the model's type stays out of this member).
   // `region`: where a windowed predict left the mass (searched instead of the whole grid).
-  update_path tracked_update(const measurement_type& z, update_report& report,
+  struct evaluate_on {
+    void (*run)(const void* context, belief_type& out, std::span<const state_range> states);
+    const void* context;
+  };
+  update_path tracked_update(double bound, evaluate_on evaluate, update_report& report,
                              const tracked_region* region);
-  update_report update_full(const measurement_type& z);
 
   // b /= total (b's sum, > 0). When 1 / total overflows the belief's precision (a float sum
   // below ~3e-39: a sharp touch far from where the prediction put its mass) the factor would
@@ -654,7 +566,6 @@ class bayes_filter {
 
   Grid grid_;
   Motion motion_;
-  Measurement measurement_;
   belief_type belief_;
   belief_type scratch_;
   belief_type log_likelihood_;
@@ -702,6 +613,89 @@ class bayes_filter {
   // Position statistics (coordinates cached once): one per object for library grids.
   std::vector<statistics_type> stats_;
 };
+}  // namespace detail
+
+/// The recursive Bayes filter over `Grid`, with the `Motion` and `Measurement` policies.
+/// The belief's precision is `Grid::scalar_type` (float or double). What does not depend on
+/// the measurement model (the belief, `predict`, `estimate`, the statistics) is its base
+/// `detail::filter_core<Grid, Motion>`.
+template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
+class bayes_filter : public detail::filter_core<Grid, Motion> {
+  using core = detail::filter_core<Grid, Motion>;
+
+ public:
+  using typename core::belief_type;
+  using typename core::control_type;
+  using typename core::estimate_type;
+  using typename core::grid_type;
+  using typename core::motion_type;
+  using typename core::scalar_type;
+  using measurement_model_type = Measurement;
+  using measurement_type = typename Measurement::measurement_type;
+
+  /// A filter with a uniform initial belief.
+  bayes_filter(Grid grid, Motion motion, Measurement measurement);
+
+  /// Measurement update with measurement `z`, through the measurement model. With tracking on
+  /// (`set_tracking`) and a model with the tracking hook (measurement/concept.hpp), only the
+  /// predicted belief's support is evaluated when that is exact to the stated tolerance; the
+  /// report's `path` says which ran.
+  update_report update(const measurement_type& z);
+
+  /// Runs the measurement model's whole-grid operations on the executor `e`
+  /// (tacmap/executor/concept.hpp): `thread_pool_executor`, `tbb_executor` or the user's own,
+  /// which must outlive its use; an empty `executor_ref` goes back to sequential. For models
+  /// that accept one (`descriptor_likelihood::set_executor`: the same values bit for bit).
+  void set_executor(executor_ref e) requires requires(Measurement& m) { m.set_executor(e); }
+  { measurement_.set_executor(e); }
+
+  /// Measurement update with a log-likelihood computed elsewhere: a flat array of `size()`
+  /// values, or an image of `rows() x cols()` for single-layer grids.
+  template <class Derived>
+  update_report update_log_likelihood(const Eigen::DenseBase<Derived>& log_likelihood) {
+    const Eigen::Index n = this->grid_.size();
+    if (log_likelihood.rows() == n && log_likelihood.cols() == 1) {
+      this->log_likelihood_ = log_likelihood.derived().template cast<scalar_type>();
+    } else if (log_likelihood.rows() == this->grid_.rows() &&
+               log_likelihood.cols() == this->grid_.cols() &&
+               n == this->grid_.rows() * this->grid_.cols()) {
+      Eigen::Map<image<scalar_type>>(this->log_likelihood_.data(), this->grid_.rows(),
+                                     this->grid_.cols()) =
+          log_likelihood.derived().template cast<scalar_type>();
+    } else {
+      detail::fail("bayes_filter::update_log_likelihood: log-likelihood is ", log_likelihood.rows(),
+                   " x ", log_likelihood.cols(), "; expected ", n,
+                   " x 1 (one value per state) or the belief image ", this->grid_.rows(), " x ",
+                   this->grid_.cols());
+    }
+    return this->apply_log_likelihood(this->log_likelihood_, "the given log-likelihood");
+  }
+
+  /// Predict with `u`, then update with `z` (one step of Table 1).
+  update_report step(const control_type& u, const measurement_type& z) {
+    this->predict(u);
+    return update(z);
+  }
+
+  [[nodiscard]] const Measurement& measurement_model() const { return measurement_; }
+  [[nodiscard]] Measurement& measurement_model() { return measurement_; }
+
+ private:
+  using core::belief_;
+  using core::grid_;
+  using core::log_likelihood_;
+  using core::reference_log_uniform_;
+  using core::region_;
+  using core::tracked_run_;
+  using core::tracking_;
+  using typename core::tracked_region;
+
+  update_path tracked_update(const measurement_type& z, update_report& report,
+                             const tracked_region* region);
+  update_report update_full(const measurement_type& z);
+
+  Measurement measurement_;
+};
 
 // The heavy members, defined out of the class: not inline, so that where tacmap::precompiled
 // declares an instantiation `extern template` (tacmap/precompiled.hpp) the compiler does not
@@ -710,12 +704,11 @@ class bayes_filter {
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wunused-function"
 
-template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
-bayes_filter<Grid, Motion, Measurement>::bayes_filter(Grid grid, Motion motion,
-                                                      Measurement measurement)
+namespace detail {
+template <state_grid Grid, motion_model<Grid> Motion>
+filter_core<Grid, Motion>::filter_core(Grid grid, Motion motion)
     : grid_(std::move(grid)),
       motion_(std::move(motion)),
-      measurement_(std::move(measurement)),
       belief_(grid_.size()),
       scratch_(grid_.size()),
       log_likelihood_(grid_.size()),
@@ -729,8 +722,8 @@ bayes_filter<Grid, Motion, Measurement>::bayes_filter(Grid grid, Motion motion,
   reset();
 }
 
-template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
-prediction_report bayes_filter<Grid, Motion, Measurement>::predict(const control_type& u) {
+template <state_grid Grid, motion_model<Grid> Motion>
+prediction_report filter_core<Grid, Motion>::predict(const control_type& u) {
   if constexpr (moves_box<Motion, Grid>) {
     // The states outside the boxes hold r <= epsilon (tracked_update): moving only the boxes
     // keeps the prediction within TV r of the whole grid's (the outside's exact prediction and
@@ -816,6 +809,239 @@ prediction_report bayes_filter<Grid, Motion, Measurement>::predict(const control
   return report;
 }
 
+template <state_grid Grid, motion_model<Grid> Motion>
+update_path filter_core<Grid, Motion>::tracked_update(double bound, evaluate_on evaluate,
+                                                      update_report& report,
+                                                      const tracked_region* region) {
+  if (!(bound < std::numeric_limits<double>::infinity())) return update_path::full;
+  const Eigen::Index n = grid_.size();
+  const auto max_states = static_cast<Eigen::Index>(tracking_.max_support * static_cast<double>(n));
+  // The support S = {p >= t}. After a windowed predict with room left in the budget (the
+  // mass outside the region at most epsilon / 2), only the region's states are searched: S
+  // holds all of its mass but epsilon - outside, and the states outside it keep their values
+  // (below). Otherwise the whole grid: one pass for every candidate threshold's mass below
+  // it, one for the ranges (no sort), and the outside is rescaled.
+  // With a motion floor the outside may hold up to A more (see tracking_params).
+  const double allowance = floor_allowance();
+  const double budget = tracking_.epsilon + allowance;
+  const bool in_region =
+      region != nullptr && region->outside <= 0.5 * tracking_.epsilon + allowance;
+  double held_out = 0.0;  // mass outside the searched states
+  detail::support_summary s;
+  if (in_region) {
+    detail::box_ranges(std::span<const grid_box>(region->boxes), grid_.rows(), grid_.cols(),
+                       layers(), candidates_);
+    const std::span<const state_range> c(candidates_);
+    held_out = region->outside;
+    const scalar_type t = detail::support_threshold_on(belief_.data(), c, budget - held_out);
+    s = detail::support_ranges_on(belief_.data(), c, t, max_states, support_);
+  } else {
+    const scalar_type t = detail::support_threshold(belief_.data(), n, budget);
+    s = detail::support_ranges(belief_.data(), n, t, max_states, support_);
+  }
+  if (s.too_wide) return update_path::full_wide;
+  // With a floor, the outside's share is estimated against the last whole-grid update: none
+  // yet (a prior set by the user), the whole grid.
+  if (allowance > 0.0 && !std::isfinite(reference_log_uniform_))
+    return update_path::full_contradicted;
+  const std::span<const state_range> in(support_);
+  evaluate.run(evaluate.context, log_likelihood_, in);
+  // The NaN and +infinity guards of apply_log_likelihood, on the states evaluated.
+  scalar_type top = -std::numeric_limits<scalar_type>::infinity();
+  for (const state_range& r : in) {
+    const auto scan =
+        detail::scan_log_likelihood(log_likelihood_.data() + r.begin, r.end - r.begin);
+    if (scan.first_nan >= 0)
+      detail::fail<std::domain_error>(
+          "bayes_filter::update: the measurement model is NaN at state ", r.begin + scan.first_nan,
+          "; expected finite log-likelihoods (or -infinity for "
+          "excluded states). The belief is unchanged");
+    top = std::max(top, scan.max);
+  }
+  if (top == std::numeric_limits<scalar_type>::infinity())
+    detail::fail<std::domain_error>(
+        "bayes_filter::update: the measurement model contains "
+        "+infinity; expected finite log-likelihoods. The belief is "
+        "unchanged");
+  // Every state of S excluded: the whole grid decides (and reports it if all are).
+  if (top == -std::numeric_limits<scalar_type>::infinity()) return update_path::full_contradicted;
+  // Z (relative to exp(top)) and the inside's uniform evidence; scratch_ = bel_bar * exp(ll -
+  // top) on S.
+  detail::weight_sums sums;
+  for (const state_range& r : in) {
+    const detail::weight_sums w =
+        detail::weight_by_likelihood(belief_.data() + r.begin, log_likelihood_.data() + r.begin,
+                                     top, scratch_.data() + r.begin, r.end - r.begin);
+    sums.posterior += w.posterior;
+    sums.likelihood += w.likelihood;
+  }
+  // rho = m exp(L) / Z, with Z = exp(top) * sums.posterior and m the predicted mass outside
+  // S (held out of the search, and the searched states below t); in logs (exp(L - top) may
+  // overflow). m is inflated by 1e-5 for its float summation. With a motion floor, only the
+  // mass beyond the floor's allowance A is bounded so; the rest is estimated below.
+  const double unheld = held_out + s.outside;
+  const double outside = unheld * (1.0 + 1e-5);
+  const double bounded = std::max(0.0, outside - allowance);
+  const double rho = bounded > 0.0
+                         ? std::exp(std::log(bounded) + (bound - static_cast<double>(top)) -
+                                    std::log(sums.posterior))
+                         : 0.0;
+  if (!(sums.posterior > 0.0 && std::isfinite(sums.posterior)) || !(rho <= tracking_.tolerance))
+    return update_path::full_contradicted;
+  // The prediction support against the last whole-grid update's uniform evidence F_ref:
+  // log(Z_in / F_ref + m), and the outside's estimated share of the full posterior,
+  // m F_ref (1 - m) / Z_in (see tracking_params).
+  const double log_inside = static_cast<double>(top) + std::log(sums.posterior);
+  double estimated_support = std::numeric_limits<double>::quiet_NaN();
+  double floor_error = 0.0;
+  if (std::isfinite(reference_log_uniform_)) {
+    const double ratio = std::exp(log_inside - reference_log_uniform_);  // Z_in / F_ref
+    estimated_support = std::log(ratio + outside);
+    if (!(estimated_support >= tracking_.doubt)) return update_path::full_contradicted;
+    if (allowance > 0.0)
+      floor_error = outside * std::max(1.0, (1.0 - std::min(outside, 1.0)) / ratio);
+  }
+  double outside_after = 0.0;  // a bound on the posterior's mass outside S
+  if (in_region || allowance > 0.0) {
+    // Outside S the states keep their values: the outside's likelihood is taken as the
+    // inside's mean under the prediction, Z_in / (1 - m) <= exp(top) <= exp(L), so
+    // TV <= rho as for any value up to the bound. No pass over the grid; the outside's mass
+    // stays m while the region is tracked (its epsilon / 2 budget checked above). With a
+    // motion floor after a whole-grid search too: the floor's states keep their share, which
+    // the estimate above accounts for (tracking_params).
+    const double inverse = (1.0 - unheld) / sums.posterior;
+    if (!(unheld < 1.0) ||
+        !(inverse < static_cast<double>(std::numeric_limits<scalar_type>::max())))
+      return update_path::full_contradicted;
+    const auto scale = static_cast<scalar_type>(inverse);
+    changed(in);
+    for (const state_range& r : in)
+      belief_.segment(r.begin, r.end - r.begin) =
+          scratch_.segment(r.begin, r.end - r.begin) * scale;
+    outside_after = outside;
+  } else {
+    // Outside S: the smallest log-likelihood found inside S. Any value up to the bound keeps
+    // TV <= rho; this one shrinks the outside's mass (by the inside's worst factor), which
+    // gives the region searches that follow their budget, and keeps it positive where the
+    // prediction was.
+    scalar_type low = top;
+    for (const state_range& r : in)
+      low = std::min(low, log_likelihood_.segment(r.begin, r.end - r.begin).minCoeff());
+    const double outside_factor = std::exp(static_cast<double>(low) - static_cast<double>(top));
+    const double total = sums.posterior + s.outside * outside_factor;
+    const double inverse = 1.0 / total;
+    if (!(inverse < static_cast<double>(std::numeric_limits<scalar_type>::max())))
+      return update_path::full_contradicted;  // the normaliser would overflow: the full path
+    const auto scale = static_cast<scalar_type>(inverse);
+    changed_all();
+    belief_ *= static_cast<scalar_type>(outside_factor * inverse);
+    for (const state_range& r : in)
+      belief_.segment(r.begin, r.end - r.begin) =
+          scratch_.segment(r.begin, r.end - r.begin) * scale;
+    outside_after = outside * outside_factor * inverse;
+  }
+  {
+    // Boxes holding S for the next predict (on the belief image, every layer's states
+    // united; clusters more than 4 cells apart in boxes of their own), and the mass outside
+    // them: S's outside less the boxes' states outside S. Boxes wider together than
+    // max_support of the image would not be moved alone: no region then.
+    std::vector<grid_box> boxes =
+        detail::cluster_boxes(in, grid_.rows(), grid_.cols(), 4, max_region_boxes);
+    double area = 0.0;
+    for (const grid_box& b : boxes) area += static_cast<double>(b.rows * b.cols);
+    if (!boxes.empty() &&
+        area <= tracking_.max_support * static_cast<double>(grid_.rows() * grid_.cols())) {
+      detail::box_ranges(std::span<const grid_box>(boxes), grid_.rows(), grid_.cols(), layers(),
+                         candidates_);
+      const double kept =
+          detail::mass_outside_of(belief_.data(), std::span<const state_range>(candidates_), in);
+      region_ = tracked_region{std::move(boxes), std::max(0.0, outside_after - kept), false};
+    }
+  }
+  const double log_evidence = std::log(sums.posterior);
+  report = {.log_evidence = log_evidence,
+            .log_likelihood_max = static_cast<double>(top),
+            .log_prediction_support = allowance > 0.0 ? estimated_support
+                                                      : log_evidence - std::log(sums.likelihood) +
+                                                            std::log(static_cast<double>(n)),
+            .path = update_path::tracked,
+            .evaluated_states = s.states,
+            .tracking_error_bound = rho + floor_error};
+  return update_path::tracked;
+}
+template <state_grid Grid, motion_model<Grid> Motion>
+update_report filter_core<Grid, Motion>::apply_log_likelihood(const belief_type& ll,
+                                                              const char* source) {
+  const auto scan = detail::scan_log_likelihood(ll.data(), ll.size());
+  if (scan.first_nan >= 0)
+    detail::fail<std::domain_error>("bayes_filter::update: ", source, " is NaN at state ",
+                                    scan.first_nan,
+                                    "; expected finite log-likelihoods (or -infinity for "
+                                    "excluded states). The belief is unchanged");
+  const scalar_type top = scan.max;
+  if (top == std::numeric_limits<scalar_type>::infinity())
+    detail::fail<std::domain_error>("bayes_filter::update: ", source,
+                                    " contains +infinity; expected finite log-likelihoods. "
+                                    "The belief is unchanged");
+  if (top == -std::numeric_limits<scalar_type>::infinity())
+    detail::fail<std::domain_error>("bayes_filter::update: ", source,
+                                    " is -infinity everywhere (it rules out every state); "
+                                    "expected at least one finite value. The belief is "
+                                    "unchanged");
+  const detail::weight_sums sums =
+      detail::weight_by_likelihood(belief_.data(), ll.data(), top, scratch_.data(), ll.size());
+  const double total = sums.posterior;
+  if (!(total > 0.0) || !std::isfinite(total))
+    detail::fail<contradiction_error>(
+        "bayes_filter::update: ", source, " gives zero probability to every state the belief ",
+        "still allows (posterior sum ", total,
+        "); the measurement contradicts the prediction. "
+        "The belief is unchanged; call reset() to start again from a uniform belief");
+  normalise(scratch_, total);
+  changed_all();
+  belief_.swap(scratch_);
+  region_.reset();
+  // sums.likelihood >= 1 (the maximum's own factor), so the logarithm is finite.
+  const double log_evidence = std::log(total);
+  return {.log_evidence = log_evidence,
+          .log_likelihood_max = static_cast<double>(top),
+          .log_prediction_support =
+              log_evidence - std::log(sums.likelihood) + std::log(static_cast<double>(ll.size())),
+          .evaluated_states = ll.size()};
+}
+
+template <state_grid Grid, motion_model<Grid> Motion>
+double filter_core<Grid, Motion>::probability_within(const Eigen::Vector2d& center_mm,
+                                                     double radius_mm) const
+    requires(Grid::dimension >= 2) {
+  if (!center_mm.allFinite())
+    detail::fail("bayes_filter::probability_within: centre (", center_mm(0), ", ", center_mm(1),
+                 ") mm; expected finite map coordinates");
+  if (!(std::isfinite(radius_mm) && radius_mm >= 0.0))
+    detail::fail("bayes_filter::probability_within: radius ", radius_mm,
+                 " mm; expected a finite radius >= 0");
+  const Eigen::Index k = leading_block();
+  return stats_[static_cast<std::size_t>(k)].probability_within(block(k), center_mm, radius_mm);
+}
+template <state_grid Grid, motion_model<Grid> Motion>
+std::pair<Eigen::Vector2d, double> filter_core<Grid, Motion>::most_probable_disc(
+    double radius_mm) const requires(Grid::dimension >= 2) {
+  if (!(std::isfinite(radius_mm) && radius_mm >= 0.0))
+    detail::fail("bayes_filter::most_probable_disc: radius ", radius_mm,
+                 " mm; expected a finite radius >= 0");
+  if constexpr (summary_grid)
+    if (summarised()) return stats_[0].most_probable_disc_summarised(grid_, radius_mm);
+  const Eigen::Index k = leading_block();
+  return stats_[static_cast<std::size_t>(k)].most_probable_disc(statistics_grid(k), block(k),
+                                                                radius_mm);
+}
+}  // namespace detail
+
+template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
+bayes_filter<Grid, Motion, Measurement>::bayes_filter(Grid grid, Motion motion,
+                                                      Measurement measurement)
+    : core(std::move(grid), std::move(motion)), measurement_(std::move(measurement)) {}
+
 template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
 update_report bayes_filter<Grid, Motion, Measurement>::update(const measurement_type& z) {
   const std::optional<tracked_region> region = std::move(region_);
@@ -856,164 +1082,22 @@ update_path bayes_filter<Grid, Motion, Measurement>::tracked_update(const measur
     (void)region;
     return update_path::full;
   } else {
-    const double bound = static_cast<double>(measurement_.log_likelihood_bound());
-    if (!(bound < std::numeric_limits<double>::infinity())) return update_path::full;
-    const Eigen::Index n = grid_.size();
-    const auto max_states =
-        static_cast<Eigen::Index>(tracking_.max_support * static_cast<double>(n));
-    // The support S = {p >= t}. After a windowed predict with room left in the budget (the
-    // mass outside the region at most epsilon / 2), only the region's states are searched: S
-    // holds all of its mass but epsilon - outside, and the states outside it keep their values
-    // (below). Otherwise the whole grid: one pass for every candidate threshold's mass below
-    // it, one for the ranges (no sort), and the outside is rescaled.
-    // With a motion floor the outside may hold up to A more (see tracking_params).
-    const double allowance = floor_allowance();
-    const double budget = tracking_.epsilon + allowance;
-    const bool in_region =
-        region != nullptr && region->outside <= 0.5 * tracking_.epsilon + allowance;
-    double held_out = 0.0;  // mass outside the searched states
-    detail::support_summary s;
-    if (in_region) {
-      detail::box_ranges(std::span<const grid_box>(region->boxes), grid_.rows(), grid_.cols(),
-                         layers(), candidates_);
-      const std::span<const state_range> c(candidates_);
-      held_out = region->outside;
-      const scalar_type t = detail::support_threshold_on(belief_.data(), c, budget - held_out);
-      s = detail::support_ranges_on(belief_.data(), c, t, max_states, support_);
-    } else {
-      const scalar_type t = detail::support_threshold(belief_.data(), n, budget);
-      s = detail::support_ranges(belief_.data(), n, t, max_states, support_);
-    }
-    if (s.too_wide) return update_path::full_wide;
-    // With a floor, the outside's share is estimated against the last whole-grid update: none
-    // yet (a prior set by the user), the whole grid.
-    if (allowance > 0.0 && !std::isfinite(reference_log_uniform_))
-      return update_path::full_contradicted;
-    const std::span<const state_range> in(support_);
-    measurement_.log_likelihood_on(grid_, z, log_likelihood_, in);
-    // The NaN and +infinity guards of apply_log_likelihood, on the states evaluated.
-    scalar_type top = -std::numeric_limits<scalar_type>::infinity();
-    for (const state_range& r : in) {
-      const auto scan =
-          detail::scan_log_likelihood(log_likelihood_.data() + r.begin, r.end - r.begin);
-      if (scan.first_nan >= 0)
-        detail::fail<std::domain_error>(
-            "bayes_filter::update: the measurement model is NaN at state ",
-            r.begin + scan.first_nan,
-            "; expected finite log-likelihoods (or -infinity for "
-            "excluded states). The belief is unchanged");
-      top = std::max(top, scan.max);
-    }
-    if (top == std::numeric_limits<scalar_type>::infinity())
-      detail::fail<std::domain_error>(
-          "bayes_filter::update: the measurement model contains "
-          "+infinity; expected finite log-likelihoods. The belief is "
-          "unchanged");
-    // Every state of S excluded: the whole grid decides (and reports it if all are).
-    if (top == -std::numeric_limits<scalar_type>::infinity()) return update_path::full_contradicted;
-    // Z (relative to exp(top)) and the inside's uniform evidence; scratch_ = bel_bar * exp(ll -
-    // top) on S.
-    detail::weight_sums sums;
-    for (const state_range& r : in) {
-      const detail::weight_sums w =
-          detail::weight_by_likelihood(belief_.data() + r.begin, log_likelihood_.data() + r.begin,
-                                       top, scratch_.data() + r.begin, r.end - r.begin);
-      sums.posterior += w.posterior;
-      sums.likelihood += w.likelihood;
-    }
-    // rho = m exp(L) / Z, with Z = exp(top) * sums.posterior and m the predicted mass outside
-    // S (held out of the search, and the searched states below t); in logs (exp(L - top) may
-    // overflow). m is inflated by 1e-5 for its float summation. With a motion floor, only the
-    // mass beyond the floor's allowance A is bounded so; the rest is estimated below.
-    const double unheld = held_out + s.outside;
-    const double outside = unheld * (1.0 + 1e-5);
-    const double bounded = std::max(0.0, outside - allowance);
-    const double rho = bounded > 0.0
-                           ? std::exp(std::log(bounded) + (bound - static_cast<double>(top)) -
-                                      std::log(sums.posterior))
-                           : 0.0;
-    if (!(sums.posterior > 0.0 && std::isfinite(sums.posterior)) || !(rho <= tracking_.tolerance))
-      return update_path::full_contradicted;
-    // The prediction support against the last whole-grid update's uniform evidence F_ref:
-    // log(Z_in / F_ref + m), and the outside's estimated share of the full posterior,
-    // m F_ref (1 - m) / Z_in (see tracking_params).
-    const double log_inside = static_cast<double>(top) + std::log(sums.posterior);
-    double estimated_support = std::numeric_limits<double>::quiet_NaN();
-    double floor_error = 0.0;
-    if (std::isfinite(reference_log_uniform_)) {
-      const double ratio = std::exp(log_inside - reference_log_uniform_);  // Z_in / F_ref
-      estimated_support = std::log(ratio + outside);
-      if (!(estimated_support >= tracking_.doubt)) return update_path::full_contradicted;
-      if (allowance > 0.0)
-        floor_error = outside * std::max(1.0, (1.0 - std::min(outside, 1.0)) / ratio);
-    }
-    double outside_after = 0.0;  // a bound on the posterior's mass outside S
-    if (in_region || allowance > 0.0) {
-      // Outside S the states keep their values: the outside's likelihood is taken as the
-      // inside's mean under the prediction, Z_in / (1 - m) <= exp(top) <= exp(L), so
-      // TV <= rho as for any value up to the bound. No pass over the grid; the outside's mass
-      // stays m while the region is tracked (its epsilon / 2 budget checked above). With a
-      // motion floor after a whole-grid search too: the floor's states keep their share, which
-      // the estimate above accounts for (tracking_params).
-      const double inverse = (1.0 - unheld) / sums.posterior;
-      if (!(unheld < 1.0) ||
-          !(inverse < static_cast<double>(std::numeric_limits<scalar_type>::max())))
-        return update_path::full_contradicted;
-      const auto scale = static_cast<scalar_type>(inverse);
-      changed(in);
-      for (const state_range& r : in)
-        belief_.segment(r.begin, r.end - r.begin) =
-            scratch_.segment(r.begin, r.end - r.begin) * scale;
-      outside_after = outside;
-    } else {
-      // Outside S: the smallest log-likelihood found inside S. Any value up to the bound keeps
-      // TV <= rho; this one shrinks the outside's mass (by the inside's worst factor), which
-      // gives the region searches that follow their budget, and keeps it positive where the
-      // prediction was.
-      scalar_type low = top;
-      for (const state_range& r : in)
-        low = std::min(low, log_likelihood_.segment(r.begin, r.end - r.begin).minCoeff());
-      const double outside_factor = std::exp(static_cast<double>(low) - static_cast<double>(top));
-      const double total = sums.posterior + s.outside * outside_factor;
-      const double inverse = 1.0 / total;
-      if (!(inverse < static_cast<double>(std::numeric_limits<scalar_type>::max())))
-        return update_path::full_contradicted;  // the normaliser would overflow: the full path
-      const auto scale = static_cast<scalar_type>(inverse);
-      changed_all();
-      belief_ *= static_cast<scalar_type>(outside_factor * inverse);
-      for (const state_range& r : in)
-        belief_.segment(r.begin, r.end - r.begin) =
-            scratch_.segment(r.begin, r.end - r.begin) * scale;
-      outside_after = outside * outside_factor * inverse;
-    }
-    {
-      // Boxes holding S for the next predict (on the belief image, every layer's states
-      // united; clusters more than 4 cells apart in boxes of their own), and the mass outside
-      // them: S's outside less the boxes' states outside S. Boxes wider together than
-      // max_support of the image would not be moved alone: no region then.
-      std::vector<grid_box> boxes =
-          detail::cluster_boxes(in, grid_.rows(), grid_.cols(), 4, max_region_boxes);
-      double area = 0.0;
-      for (const grid_box& b : boxes) area += static_cast<double>(b.rows * b.cols);
-      if (!boxes.empty() &&
-          area <= tracking_.max_support * static_cast<double>(grid_.rows() * grid_.cols())) {
-        detail::box_ranges(std::span<const grid_box>(boxes), grid_.rows(), grid_.cols(), layers(),
-                           candidates_);
-        const double kept =
-            detail::mass_outside_of(belief_.data(), std::span<const state_range>(candidates_), in);
-        region_ = tracked_region{std::move(boxes), std::max(0.0, outside_after - kept), false};
-      }
-    }
-    const double log_evidence = std::log(sums.posterior);
-    report = {.log_evidence = log_evidence,
-              .log_likelihood_max = static_cast<double>(top),
-              .log_prediction_support = allowance > 0.0 ? estimated_support
-                                                        : log_evidence - std::log(sums.likelihood) +
-                                                              std::log(static_cast<double>(n)),
-              .path = update_path::tracked,
-              .evaluated_states = s.states,
-              .tracking_error_bound = rho + floor_error};
-    return update_path::tracked;
+    // The model's log_likelihood_on behind a function pointer, so that the search itself is
+    // the core's (one indirect call per update).
+    struct call {
+      const Measurement* model;
+      const Grid* grid;
+      const measurement_type* z;
+    };
+    const call c{&measurement_, &grid_, &z};
+    const typename core::evaluate_on evaluate{
+        [](const void* context, belief_type& out, std::span<const state_range> states) {
+          const call& k = *static_cast<const call*>(context);
+          k.model->log_likelihood_on(*k.grid, *k.z, out, states);
+        },
+        &c};
+    return core::tracked_update(static_cast<double>(measurement_.log_likelihood_bound()), evaluate,
+                                report, region);
   }
 }
 
@@ -1029,11 +1113,12 @@ update_report bayes_filter<Grid, Motion, Measurement>::update_full(const measure
     detail::fail("bayes_filter::update: the measurement model resized its output to ", got,
                  " values; expected ", grid_.size(), " (one per state). The belief is unchanged");
   }
-  return apply_log_likelihood(log_likelihood_, "the measurement model");
+  return this->apply_log_likelihood(log_likelihood_, "the measurement model");
 }
 
-template <state_grid Grid, motion_model<Grid> Motion, measurement_model<Grid> Measurement>
-auto bayes_filter<Grid, Motion, Measurement>::estimate() const -> estimate_type {
+namespace detail {
+template <state_grid Grid, motion_model<Grid> Motion>
+auto filter_core<Grid, Motion>::estimate() const -> estimate_type {
   if constexpr (library_state_grid<Grid>) {
     // Positions of different objects are in different maps: the estimate is that of the most
     // probable object's position belief, conditioned on that object.
@@ -1059,6 +1144,7 @@ auto bayes_filter<Grid, Motion, Measurement>::estimate() const -> estimate_type 
     return stats_[0].estimate(grid_, block(0));
   }
 }
+}  // namespace detail
 
 #pragma GCC diagnostic pop
 }  // namespace tacmap

@@ -1194,6 +1194,7 @@ TACMAP_EXTERN_TEMPLATE void descriptor_likelihood<sift_lite>::log_likelihood(
     const planar_grid<float>&, const image<float>&, Eigen::ArrayXf&) const;
 TACMAP_EXTERN_TEMPLATE void descriptor_likelihood<classic_sift>::log_likelihood(
     const planar_grid<float>&, const image<float>&, Eigen::ArrayXf&) const;
+TACMAP_EXTERN_FILTER_CORE(planar_grid<float>, odometry_gaussian);
 TACMAP_EXTERN_FILTER(planar_grid<float>, odometry_gaussian, descriptor_likelihood<sift_lite>);
 TACMAP_EXTERN_FILTER(planar_grid<float>, odometry_gaussian, descriptor_likelihood<classic_sift>);
 }  // namespace tacmap

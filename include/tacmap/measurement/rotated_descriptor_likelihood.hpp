@@ -1076,6 +1076,7 @@ class rotated_descriptor_likelihood {
 namespace tacmap {
 TACMAP_EXTERN_TEMPLATE class rotated_descriptor_likelihood<sift_lite>;
 TACMAP_EXTERN_TEMPLATE class rotated_descriptor_likelihood<classic_sift>;
+TACMAP_EXTERN_FILTER_CORE(pose_grid<float>, pose_odometry_gaussian);
 TACMAP_EXTERN_FILTER(pose_grid<float>, pose_odometry_gaussian,
                      rotated_descriptor_likelihood<sift_lite>);
 TACMAP_EXTERN_FILTER(pose_grid<float>, pose_odometry_gaussian,
