@@ -18,6 +18,7 @@
 
 #include "blob_images.hpp"
 #include "tacmap/descriptor/dense_sift.hpp"
+#include "tacmap/descriptor/detail/dense_sift_windows.hpp"
 #include "tacmap/measurement/descriptor_likelihood.hpp"
 #include "tacmap/measurement/detail/distance_kernel.hpp"
 #include "test_support.hpp"
@@ -272,6 +273,102 @@ TEST_CASE("describe_windows: bad input is refused with what was expected") {
   image<float> with_nan = map;
   with_nan(3, 4) = std::numeric_limits<float>::quiet_NaN();
   CHECK(msg({18, 42}, ok, with_nan).find("NaN") != std::string::npos);
+}
+
+namespace {
+
+/// The pooled rows of every window row of `map` from a window_pooler building its fields
+/// `band` window rows at a time, rows asked in `order`; one array per row (all rows in order).
+template <int NumBins, int NumAngles, class T>
+std::vector<Eigen::Array<T, Eigen::Dynamic, 1>> pooled_rows(
+    const image<T>& map, pixel_size window, const std::vector<grid_cell>& offsets,
+    Eigen::Index patch, Eigen::Index band, const std::vector<Eigen::Index>& order) {
+  namespace ds = tacmap::detail::dsift;
+  const Eigen::Index bin = patch / NumBins;
+  const auto gradient = ds::make_gradient_taps<T>(1.0);
+  const auto pooling = ds::make_pooling_taps<T>(patch, bin);
+  Eigen::Array<T, NumAngles, 1> cos_a, sin_a;
+  for (int k = 0; k < NumAngles; ++k) {
+    cos_a(k) = static_cast<T>(std::cos(2.0 * 3.141592653589793 * k / NumAngles));
+    sin_a(k) = static_cast<T>(std::sin(2.0 * 3.141592653589793 * k / NumAngles));
+  }
+  const image<T> scaled = map / map.abs().maxCoeff();
+  ds::window_pooler<NumBins, NumAngles, T> pool(scaled, window, std::span<const grid_cell>(offsets),
+                                                bin, gradient, pooling, cos_a, sin_a, 9.0, band);
+  const Eigen::Index n =
+      NumBins * NumBins * NumAngles * pool.cols() * static_cast<Eigen::Index>(offsets.size());
+  // Factors that differ by window (as window peaks do), so that a column mix-up shows.
+  std::vector<T> factor(static_cast<std::size_t>(pool.cols()));
+  for (std::size_t c = 0; c < factor.size(); ++c)
+    factor[c] = T(1) + T(0.25) * static_cast<T>(c % 3);
+  std::vector<Eigen::Array<T, Eigen::Dynamic, 1>> out(static_cast<std::size_t>(pool.rows()));
+  for (const Eigen::Index r : order) {
+    auto& row = out[static_cast<std::size_t>(r)];
+    row.setConstant(n, std::numeric_limits<T>::quiet_NaN());
+    pool(r, factor.data(), row.data());
+  }
+  return out;
+}
+
+/// Banded builds of several band sizes, in order and out of order, against the whole map as one
+/// band: the same bits (each field row is computed by the same operations whatever the band).
+template <int NumBins, int NumAngles, class T>
+void check_bands(Eigen::Index patch, Eigen::Index spacing,
+                 const std::vector<std::pair<pixel_size, pixel_size>>& cases) {
+  unsigned seed = 40;
+  for (const auto& [map_size, window] : cases) {
+    const auto offsets = patch_offsets(window, patch, spacing);
+    REQUIRE_FALSE(offsets.empty());
+    for (const auto& [name, map] : test_maps<T>(map_size.height, map_size.width, seed++)) {
+      // Noise (every stencil matters) and blobs on zero (weak, unnormalised values); the other
+      // maps are checked against the per-window reference above.
+      if (name != "noise" && name != "blobs") continue;
+      const Eigen::Index rows = map_size.height - window.height + 1;
+      std::vector<Eigen::Index> forward(static_cast<std::size_t>(rows));
+      for (Eigen::Index r = 0; r < rows; ++r) forward[static_cast<std::size_t>(r)] = r;
+      const auto whole =
+          pooled_rows<NumBins, NumAngles, T>(map, window, offsets, patch, rows, forward);
+      std::vector<Eigen::Index> shuffled = forward;
+      std::shuffle(shuffled.begin(), shuffled.end(), std::mt19937(seed));
+      for (const Eigen::Index band : {Eigen::Index{1}, Eigen::Index{7}, Eigen::Index{32}}) {
+        for (const bool in_order : {true, false}) {
+          if (!in_order && band != 7) continue;
+          CAPTURE(name);
+          CAPTURE(map_size.width);
+          CAPTURE(map_size.height);
+          CAPTURE(window.width);
+          CAPTURE(window.height);
+          CAPTURE(band);
+          CAPTURE(in_order);
+          const auto banded = pooled_rows<NumBins, NumAngles, T>(map, window, offsets, patch, band,
+                                                                 in_order ? forward : shuffled);
+          Eigen::Index differing = 0;
+          for (std::size_t r = 0; r < whole.size(); ++r) {
+            // Bit for bit (NaN, were a value left unwritten, differs from everything).
+            differing += (banded[r] != whole[r]).count();
+          }
+          CHECK(differing == 0);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE(
+    "window_pooler: fields built in bands of window rows equal the whole-map build, bit for bit") {
+  // Window heights 42 and 18 and map heights giving 1 .. 37 window rows: bands that divide the
+  // rows, that leave a short last band, and bands larger than the map.
+  check_bands<2, 8, float>(
+      18, 9,
+      {{{24, 78}, {18, 42}}, {{24, 42}, {18, 42}}, {{47, 36}, {42, 18}}, {{38, 45}, {34, 34}}});
+  check_bands<4, 8, float>(16, 9, {{{20, 61}, {18, 42}}, {{37, 41}, {34, 34}}});
+  check_bands<2, 8, double>(18, 9, {{{22, 61}, {18, 42}}});
+  // Three bins and four orientations, patches every 5 px (several row groups).
+  check_bands<3, 4, float>(18, 5, {{{21, 40}, {18, 26}}});
+  // Patch 4, one bin: windows of 4 and 7 px (frame classes meeting, no inner rows).
+  check_bands<1, 8, float>(4, 1, {{{9, 15}, {4, 4}}, {{12, 19}, {4, 7}}});
 }
 
 TEST_CASE("descriptor_tiles::set_columns (packet transposes) equals its scalar reference") {

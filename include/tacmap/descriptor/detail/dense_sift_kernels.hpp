@@ -20,15 +20,22 @@
 #include <vector>
 #include <xsimd/xsimd.hpp>
 
+#include "tacmap/detail/huge_pages.hpp"
 #include "tacmap/detail/weighted_sum.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/simd.hpp"
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
-
 namespace tacmap::detail::dsift {
+
+/// Resizes `a` to n elements (unspecified values), with huge pages asked for when that maps new
+/// memory: at camera resolution each shared field is ~10 MB, mapped fresh per preparation, and
+/// its 4 KB page faults cost more than computing it (bench/camera_bench.cpp, build rows).
+template <class T>
+void resize_fresh(Eigen::Array<T, Eigen::Dynamic, 1>& a, Eigen::Index n) {
+  if (a.size() == n) return;
+  a.resize(n);
+  advise_huge_pages(a.data(), static_cast<std::size_t>(n) * sizeof(T));
+}
 
 /// Lazebnik pads the image with 2 mirrored pixels on each side ([I(2) I(1) I ... I(end)
 /// I(end-1)] in MATLAB): index -1 reads 0, -2 reads 1, n reads n-1, n+1 reads n-2.
@@ -398,7 +405,7 @@ T orientation_channels(const Eigen::Array<T, Eigen::Dynamic, 1>& gx,
                        const column_span* spans = nullptr, bool margins_zero = false) {
   using array = Eigen::Array<T, Eigen::Dynamic, 1>;
   const Eigen::Index row_size = (w + 2 * margin) * NumAngles;
-  channels.resize((h + 2 * margin) * row_size);
+  resize_fresh(channels, (h + 2 * margin) * row_size);
   if (!margins_zero) {
     channels.head(margin * row_size).setZero();
     channels.tail(margin * row_size).setZero();
@@ -1096,25 +1103,7 @@ void normalise(T* data, Eigen::Index count, T threshold, T clamp) {
   }
 }
 
-/// Asks Linux for transparent huge pages on the whole 2 MB pages of [data, data + bytes), before
-/// they are first touched; elsewhere, or for a smaller block, does nothing. Why: a field at
-/// camera resolution is large (37 MB of descriptors at 640 x 480) and malloc maps it fresh on
-/// every call (above glibc's 32 MB mmap threshold cap); faulting it in 4 KB pages took twice as
-/// long as computing it (measured: 10,000 faults, 31 ms of system time per call, loaded
-/// machine; with huge pages 18 faults). Only a hint: the kernel may still use small pages.
-inline void advise_huge_pages(void* data, std::size_t bytes) noexcept {
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-  constexpr std::uintptr_t huge = std::uintptr_t{1} << 21U;
-  const auto start = reinterpret_cast<std::uintptr_t>(data);
-  const std::uintptr_t begin = (start + huge - 1) & ~(huge - 1);
-  const std::uintptr_t end = (start + bytes) & ~(huge - 1);
-  if (end > begin) {
-    static_cast<void>(::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE));
-  }
-#else
-  static_cast<void>(data);
-  static_cast<void>(bytes);
-#endif
-}
+/// `tacmap::detail::advise_huge_pages` (tacmap/detail/huge_pages.hpp), under its old name.
+using tacmap::detail::advise_huge_pages;
 
 }  // namespace tacmap::detail::dsift

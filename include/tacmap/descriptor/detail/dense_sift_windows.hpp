@@ -54,12 +54,33 @@ struct angle_block {
   Eigen::Array<T, Eigen::Dynamic, 1> data;
   Eigen::Index y0 = 0, x0 = 0, rows = 0, cols = 0;
 
+  /// The rectangle becomes [top, top + n_rows) x [left, left + n_cols); values unspecified. The
+  /// storage only grows (a band of rows reuses it: no fresh pages per band).
   void reshape(Eigen::Index top, Eigen::Index left, Eigen::Index n_rows, Eigen::Index n_cols) {
     y0 = top;
     x0 = left;
     rows = std::max<Eigen::Index>(n_rows, 0);
     cols = std::max<Eigen::Index>(n_cols, 0);
-    data.resize(rows * cols * NumAngles);
+    if (data.size() < rows * cols * NumAngles) resize_fresh(data, rows * cols * NumAngles);
+  }
+  /// Moves the rectangle down to rows [top, end) (top >= y0, same columns), keeping the values
+  /// of the rows it already has there (moved to the front of the storage). Returns the first
+  /// row whose values are unspecified (`end` when every row was kept).
+  Eigen::Index slide(Eigen::Index top, Eigen::Index end, Eigen::Index left, Eigen::Index n_cols) {
+    Eigen::Index first = top;
+    const Eigen::Index had_end = y0 + rows;
+    if (!empty() && x0 == left && cols == n_cols && top >= y0 && top < had_end) {
+      const Eigen::Index kept = std::min(had_end, end) - top;
+      if (top > y0) {
+        T* d = data.data();
+        std::copy(d + (top - y0) * row_stride(), d + (top - y0 + kept) * row_stride(), d);
+      }
+      first = top + kept;
+      const Eigen::Index n = (end - top) * n_cols * NumAngles;
+      if (data.size() < n) data.conservativeResize(n);  // keeps the moved rows
+    }
+    reshape(top, left, end - top, n_cols);
+    return first;
   }
   [[nodiscard]] bool empty() const { return rows == 0 || cols == 0; }
   [[nodiscard]] Eigen::Index row_stride() const { return cols * NumAngles; }
@@ -218,7 +239,8 @@ class window_pooler {
                 Eigen::Index bin, const gradient_taps<T>& gradient,
                 const std::vector<pooling_tap<T>>& pooling,
                 const Eigen::Array<T, NumAngles, 1>& cos_a,
-                const Eigen::Array<T, NumAngles, 1>& sin_a, double alpha)
+                const Eigen::Array<T, NumAngles, 1>& sin_a, double alpha,
+                Eigen::Index band_rows = default_band_rows)
       : map_(scaled_map),
         h_(window.height),
         w_(window.width),
@@ -230,13 +252,20 @@ class window_pooler {
         sin_a_(sin_a),
         alpha_(alpha),
         rows_plan_(bin_positions(offsets, bin, true), h_, rows_, pooling),
-        cols_plan_(bin_positions(offsets, bin, false), w_, cols_, pooling) {
+        cols_plan_(bin_positions(offsets, bin, false), w_, cols_, pooling),
+        band_(std::clamp<Eigen::Index>(band_rows, 1, std::max<Eigen::Index>(rows_, 1))) {
     TACMAP_ASSERT(gradient.radius == mirror_pad && antisymmetric(gradient),
                   "window_pooler: gradient taps of radius mirror_pad, antisymmetric");
     TACMAP_ASSERT(h_ >= 2 * mirror_pad && w_ >= 2 * mirror_pad, "window_pooler: window too small");
-    build_fields();
+    size_fields();
     build_bins(offsets, bin);
   }
+
+  /// Window rows whose shared fields are built at a time (`band_rows`' default): the fields
+  /// then take (band + window height) rows instead of the whole map's, reused band after band.
+  /// At 640 x 480 the whole-map fields were ~40 blocks of ~10 MB, and faulting in that fresh
+  /// memory cost more than computing it (bench/camera_bench.cpp, build rows).
+  static constexpr Eigen::Index default_band_rows = 32;
 
   window_pooler(const window_pooler&) = delete;
   window_pooler& operator=(const window_pooler&) = delete;
@@ -247,7 +276,11 @@ class window_pooler {
   /// The pooled values of the windows with top-left (r0, c0), c0 = 0 .. cols() - 1, times
   /// factor[c0]: patch m of window c0 in column c0 * M + m of `out` (NumBins^2 * NumAngles
   /// rows, column-major), in dense_sift's element order, unnormalised.
+  /// Fastest called with r0 = 0, 1, 2, ... (the fields are built a band of rows at a time, each
+  /// row once); any order gives the same values.
   void operator()(Eigen::Index r0, const T* factor, T* out) {
+    TACMAP_ASSERT(r0 >= 0 && r0 < rows_, "window_pooler: window row outside the map");
+    if (r0 < band_lo_ || r0 >= band_hi_) build_band(r0, std::min(rows_, r0 + band_));
     const Eigen::Index n = cols_ * NumAngles;
     for (std::size_t b = 0; b < bins_.size(); ++b) {
       const bin_terms& terms = bins_[b];
@@ -258,11 +291,11 @@ class window_pooler {
         continue;
       }
       if (terms.source.size() == 1 && terms.weight[0] == T(1)) {  // one dense field: read it
-        row_of_[b] = terms.source[0] + r0 * terms.stride[0];
+        row_of_[b] = terms.source[0]->at(r0 + terms.dy[0], terms.dx[0]);
         continue;
       }
       for (std::size_t t = 0; t < terms.source.size(); ++t)
-        sources_[t] = terms.source[t] + r0 * terms.stride[t];
+        sources_[t] = terms.source[t]->at(r0 + terms.dy[t], terms.dx[t]);
       weighted_sum(sources_.data(), terms.weight.data(), terms.source.size(), row, n);
       row_of_[b] = row;
     }
@@ -284,12 +317,13 @@ class window_pooler {
 
  private:
   struct bin_terms {
-    std::vector<const T*> source;  ///< the term's field at window (0, 0)
-    std::vector<Eigen::Index> stride;
+    std::vector<const block*> source;  ///< the term's field, read at (r0 + dy, dx)
+    std::vector<Eigen::Index> dy, dx;
     std::vector<T> weight;
-    void add(const T* s, Eigen::Index st, T w) {
-      source.push_back(s);
-      stride.push_back(st);
+    void add(const block& s, Eigen::Index y, Eigen::Index x, T w) {
+      source.push_back(&s);
+      dy.push_back(y);
+      dx.push_back(x);
       weight.push_back(w);
     }
   };
@@ -317,8 +351,8 @@ class window_pooler {
     const Eigen::Index top = y0 + sy + *dy_lo;  // first map row read
     const Eigen::Index n_src = (nr - 1) + (*dy_hi - *dy_lo) + 1;
     // Horizontal pass over the map rows read: derivative (for gx) and smoothing (for gy).
-    hd_.resize(n_src * nc);
-    hs_.resize(n_src * nc);
+    grow(hd_, n_src * nc);
+    grow(hs_, n_src * nc);
     sources_.resize(std::max(sources_.size(), taps));
     const Eigen::Index stride = map_.cols();
     for (Eigen::Index k = 0; k < n_src; ++k) {
@@ -328,13 +362,19 @@ class window_pooler {
       weighted_sum(sources_.data(), gradient_.smooth.data(), taps, hs_.data() + k * nc, nc);
     }
     // Vertical pass: every output row reads the same row offsets, so it is one flat sum.
-    gx_.resize(nr * nc);
-    gy_.resize(nr * nc);
+    grow(gx_, nr * nc);
+    grow(gy_, nr * nc);
     for (std::size_t a = 0; a < taps; ++a) sources_[a] = hd_.data() + (dy[a] - *dy_lo) * nc;
     weighted_sum(sources_.data(), gradient_.smooth.data(), taps, gx_.data(), nr * nc);
     for (std::size_t a = 0; a < taps; ++a) sources_[a] = hs_.data() + (dy[a] - *dy_lo) * nc;
     derivative(sources_.data(), gy_.data(), nr * nc);
     orientation_channels<NumAngles>(gx_, gy_, nr, nc, nc, 0, cos_a_, sin_a_, alpha_, out.data);
+  }
+
+  // Scratch of at least n elements: it only grows, so that the calls of band after band (each
+  // its own size) reuse it rather than free and map it again (brk churn: 5x the page faults).
+  static void grow(array& a, Eigen::Index n) {
+    if (a.size() < n) resize_fresh(a, n);
   }
 
   // out[i] = sum_{b = 1..radius} D(b) (src[radius + b][i] - src[radius - b][i]): the derivative
@@ -356,39 +396,67 @@ class window_pooler {
     }
   }
 
-  // out(y, x) = sum_t w_t in(y + d_t, x) for y in [begin, end), every column of `in`.
+  // out(y, x) = sum_t w_t in(y + d_t, x) for y in [begin, end), every column of `in`; `out`
+  // holds those rows and in's columns.
   void pool_vertical(const block& in, const std::vector<pooling_tap<T>>& taps, Eigen::Index begin,
                      Eigen::Index end, block& out) {
-    out.reshape(begin, in.x0, end - begin, in.cols);
-    if (out.empty() || in.empty()) return;
+    if (end <= begin || in.empty()) return;
     weights_.clear();
     sources_.resize(std::max(sources_.size(), taps.size()));
     for (std::size_t t = 0; t < taps.size(); ++t) {
       sources_[t] = in.at(begin + taps[t].offset, in.x0);
       weights_.push_back(taps[t].weight);
     }
-    weighted_sum(sources_.data(), weights_.data(), taps.size(), out.data.data(),
-                 out.rows * out.row_stride());
+    weighted_sum(sources_.data(), weights_.data(), taps.size(), out.at(begin, in.x0),
+                 (end - begin) * in.row_stride());
   }
 
-  // out(y, x) = sum_t w_t in(y, x + d_t) for x in [begin, end), every row of `in`.
+  // out(y, x) = sum_t w_t in(y, x + d_t) for x in [begin, end), every row of `in`; `out` holds
+  // in's rows and those columns.
   void pool_horizontal(const block& in, const std::vector<pooling_tap<T>>& taps, Eigen::Index begin,
                        Eigen::Index end, block& out) {
-    out.reshape(in.y0, begin, in.rows, end - begin);
-    if (out.empty() || in.empty()) return;
+    if (end <= begin || in.empty()) return;
     weights_.clear();
     for (const pooling_tap<T>& t : taps) weights_.push_back(t.weight);
     sources_.resize(std::max(sources_.size(), taps.size()));
     for (Eigen::Index y = in.y0; y < in.y0 + in.rows; ++y) {
       for (std::size_t t = 0; t < taps.size(); ++t) sources_[t] = in.at(y, begin + taps[t].offset);
       weighted_sum(sources_.data(), weights_.data(), taps.size(), out.at(y, begin),
-                   out.row_stride());
+                   (end - begin) * NumAngles);
     }
   }
 
-  void build_fields() {
+  void size_fields() {
+    inner_inner_.resize(rows_plan_.groups.size() * cols_plan_.groups.size());
+    frame_inner_.resize(line_classes * cols_plan_.groups.size());
+    inner_frame_.resize(line_classes * rows_plan_.groups.size());
+    frame_frame_.resize(line_classes * line_classes);
+  }
+
+  // class_channels for index rows [first, end) into rows of `out` (which holds them).
+  // `fresh`: the scratch (one per width, so that its storage keeps its size band after band).
+  void channels_into(Eigen::Index first, Eigen::Index end, Eigen::Index sy,
+                     const std::vector<Eigen::Index>& dy, Eigen::Index x0, Eigen::Index nc,
+                     Eigen::Index sx, const std::vector<Eigen::Index>& dx, block& fresh,
+                     block& out) {
+    if (end <= first || nc <= 0) return;
+    class_channels(first, end - first, sy, dy, x0, nc, sx, dx, fresh);
+    std::copy(fresh.data.data(), fresh.data.data() + (end - first) * nc * NumAngles,
+              out.at(first, x0));
+  }
+
+  // The shared fields (file comment) at the rows the windows of rows [r_lo, r_hi) read. Rows a
+  // field already holds from the band before are kept, not recomputed: every field row is
+  // computed once when the bands go down the map, as when the whole map was one band.
+  void build_band(Eigen::Index r_lo, Eigen::Index r_hi) {
+    if (band_hi_ == 0) {  // nothing built, or a build that threw: keep no rows
+      inner_channels_.rows = 0;
+      for (block& b : inner_frame_channels_) b.rows = 0;
+      for (block& b : inner_inner_) b.rows = 0;
+      for (block& b : inner_frame_) b.rows = 0;
+    }
+    band_lo_ = band_hi_ = 0;  // unknown while building (an exception leaves it unknown)
     const Eigen::Index r = gradient_.radius;
-    const Eigen::Index hm = map_.rows();
     const Eigen::Index wm = map_.cols();
     const bool row_inner = !rows_plan_.groups.empty();
     const bool col_inner = !cols_plan_.groups.empty();
@@ -400,61 +468,78 @@ class window_pooler {
     }
     const std::size_t n_row_groups = rows_plan_.groups.size();
     const std::size_t n_col_groups = cols_plan_.groups.size();
+    // Inner map rows of the band's windows, and the rows [lo, hi) of row group g's fields: the
+    // group's sample points u below the band's window rows.
+    const Eigen::Index inner_lo = r_lo + r;
+    const Eigen::Index inner_hi = r_hi - 1 + h_ - r;
+    const auto group_rows = [&](std::size_t g) {
+      const auto& rg = rows_plan_.groups[g];
+      return std::pair<Eigen::Index, Eigen::Index>{r_lo + rg.begin, r_hi + (rg.end - rows_)};
+    };
     // Inner x inner: the map's own channels (rows and columns frame_width .. size - frame_width),
     // pooled per (row group, column group).
     if (row_inner && col_inner) {
-      block channels, vertical;
-      class_channels(r, hm - 2 * r, 0, inner, r, wm - 2 * r, 0, inner, channels);
-      inner_inner_.resize(n_row_groups * n_col_groups);
+      const Eigen::Index first = inner_channels_.slide(inner_lo, inner_hi, r, wm - 2 * r);
+      channels_into(first, inner_hi, 0, inner, r, wm - 2 * r, 0, inner, fresh_, inner_channels_);
       for (std::size_t g = 0; g < n_row_groups; ++g) {
         const auto& rg = rows_plan_.groups[g];
-        pool_vertical(channels, rg.taps, rg.begin, rg.end, vertical);
+        const auto [lo, hi] = group_rows(g);
+        Eigen::Index from = hi;
         for (std::size_t k = 0; k < n_col_groups; ++k) {
           const auto& cg = cols_plan_.groups[k];
-          pool_horizontal(vertical, cg.taps, cg.begin, cg.end, inner_inner_[g * n_col_groups + k]);
+          from = inner_inner_[g * n_col_groups + k].slide(lo, hi, cg.begin, cg.end - cg.begin);
+        }
+        if (from >= hi) continue;
+        vertical_.reshape(from, inner_channels_.x0, hi - from, inner_channels_.cols);
+        pool_vertical(inner_channels_, rg.taps, from, hi, vertical_);
+        for (std::size_t k = 0; k < n_col_groups; ++k) {
+          const auto& cg = cols_plan_.groups[k];
+          pool_horizontal(vertical_, cg.taps, cg.begin, cg.end, inner_inner_[g * n_col_groups + k]);
         }
       }
     }
     // Frame row class x inner columns: index (r0, x), pooled along the row per column group.
-    frame_inner_.resize(line_classes * n_col_groups);
     for (int k = 0; k < line_classes; ++k) {
       if (k == inner_class || !rows_plan_.frame_used[static_cast<std::size_t>(k)] || !col_inner)
         continue;
-      block channels;
-      class_channels(0, rows_, class_pixel(k, h_), row_src[static_cast<std::size_t>(k)], r,
-                     wm - 2 * r, 0, inner, channels);
+      class_channels(r_lo, r_hi - r_lo, class_pixel(k, h_), row_src[static_cast<std::size_t>(k)], r,
+                     wm - 2 * r, 0, inner, fresh_);
       for (std::size_t g = 0; g < n_col_groups; ++g) {
         const auto& cg = cols_plan_.groups[g];
-        pool_horizontal(channels, cg.taps, cg.begin, cg.end,
-                        frame_inner_[static_cast<std::size_t>(k) * n_col_groups + g]);
+        block& out = frame_inner_[static_cast<std::size_t>(k) * n_col_groups + g];
+        out.reshape(r_lo, cg.begin, r_hi - r_lo, cg.end - cg.begin);
+        pool_horizontal(fresh_, cg.taps, cg.begin, cg.end, out);
       }
     }
     // Inner rows x frame column class: index (y, c0), pooled down the column per row group.
-    inner_frame_.resize(line_classes * n_row_groups);
     for (int k = 0; k < line_classes; ++k) {
       if (k == inner_class || !cols_plan_.frame_used[static_cast<std::size_t>(k)] || !row_inner)
         continue;
-      block channels;
-      class_channels(r, hm - 2 * r, 0, inner, 0, cols_, class_pixel(k, w_),
-                     col_src[static_cast<std::size_t>(k)], channels);
+      block& channels = inner_frame_channels_[static_cast<std::size_t>(k)];
+      const Eigen::Index first = channels.slide(inner_lo, inner_hi, 0, cols_);
+      channels_into(first, inner_hi, 0, inner, 0, cols_, class_pixel(k, w_),
+                    col_src[static_cast<std::size_t>(k)], fresh_columns_, channels);
       for (std::size_t g = 0; g < n_row_groups; ++g) {
         const auto& rg = rows_plan_.groups[g];
-        pool_vertical(channels, rg.taps, rg.begin, rg.end,
-                      inner_frame_[static_cast<std::size_t>(k) * n_row_groups + g]);
+        const auto [lo, hi] = group_rows(g);
+        block& out = inner_frame_[static_cast<std::size_t>(k) * n_row_groups + g];
+        const Eigen::Index from = out.slide(lo, hi, 0, cols_);
+        pool_vertical(channels, rg.taps, from, hi, out);
       }
     }
     // Frame x frame: single pixels, index (r0, c0).
-    frame_frame_.resize(line_classes * line_classes);
     for (int i = 0; i < line_classes; ++i)
       for (int j = 0; j < line_classes; ++j) {
         if (i == inner_class || j == inner_class ||
             !rows_plan_.frame_used[static_cast<std::size_t>(i)] ||
             !cols_plan_.frame_used[static_cast<std::size_t>(j)])
           continue;
-        class_channels(0, rows_, class_pixel(i, h_), row_src[static_cast<std::size_t>(i)], 0, cols_,
-                       class_pixel(j, w_), col_src[static_cast<std::size_t>(j)],
+        class_channels(r_lo, r_hi - r_lo, class_pixel(i, h_), row_src[static_cast<std::size_t>(i)],
+                       0, cols_, class_pixel(j, w_), col_src[static_cast<std::size_t>(j)],
                        frame_frame_[static_cast<std::size_t>(i * line_classes + j)]);
       }
+    band_lo_ = r_lo;
+    band_hi_ = r_hi;
   }
 
   void build_bins(std::span<const grid_cell> offsets, Eigen::Index bin) {
@@ -487,24 +572,24 @@ class window_pooler {
       if (py.group >= 0 && px.group >= 0) {
         const block& f = inner_inner_[static_cast<std::size_t>(py.group) * n_col_groups +
                                       static_cast<std::size_t>(px.group)];
-        terms.add(f.at(py.u, px.u), f.row_stride(), T(1));
+        terms.add(f, py.u, px.u, T(1));
       }
       if (px.group >= 0)
         for (const auto& fr : py.frame) {
           const block& f = frame_inner_[static_cast<std::size_t>(fr.cls) * n_col_groups +
                                         static_cast<std::size_t>(px.group)];
-          terms.add(f.at(0, px.u), f.row_stride(), fr.weight);
+          terms.add(f, 0, px.u, fr.weight);
         }
       if (py.group >= 0)
         for (const auto& fc : px.frame) {
           const block& f = inner_frame_[static_cast<std::size_t>(fc.cls) * n_row_groups +
                                         static_cast<std::size_t>(py.group)];
-          terms.add(f.at(py.u, 0), f.row_stride(), fc.weight);
+          terms.add(f, py.u, 0, fc.weight);
         }
       for (const auto& fr : py.frame)
         for (const auto& fc : px.frame) {
           const block& f = frame_frame_[static_cast<std::size_t>(fr.cls * line_classes + fc.cls)];
-          terms.add(f.at(0, 0), f.row_stride(), fr.weight * fc.weight);
+          terms.add(f, 0, 0, fr.weight * fc.weight);
         }
       most = std::max(most, terms.source.size());
     }
@@ -521,15 +606,21 @@ class window_pooler {
   Eigen::Array<T, NumAngles, 1> cos_a_, sin_a_;
   double alpha_;
   axis_plan<T> rows_plan_, cols_plan_;
+  Eigen::Index band_;                       // window rows per band
+  Eigen::Index band_lo_ = 0, band_hi_ = 0;  // the band the fields hold: window rows [lo, hi)
   // The shared fields (see the file comment), indexed by class and tap group.
   std::vector<block> inner_inner_;  // [row group * column groups + column group], map (y, x)
   std::vector<block> frame_inner_;  // [row class * column groups + column group], (r0, x)
   std::vector<block> inner_frame_;  // [column class * row groups + row group], (y, c0)
   std::vector<block> frame_frame_;  // [row class * line_classes + column class], (r0, c0)
-  std::vector<bin_terms> bins_;     // per distinct bin position (u, v)
-  std::vector<int> bin_of_;         // patch m's element block e -> distinct bin
+  // The channels the band's fields pool down the columns, kept from band to band.
+  block inner_channels_;                                  // map (y, x), inner rows and columns
+  std::array<block, line_classes> inner_frame_channels_;  // [column class], (y, c0)
+  std::vector<bin_terms> bins_;                           // per distinct bin position (u, v)
+  std::vector<int> bin_of_;  // patch m's element block e -> distinct bin
   // Scratch.
   array hd_, hs_, gx_, gy_;
+  block fresh_, fresh_columns_, vertical_;
   array rows_buffer_;
   std::vector<const T*> row_of_;
   std::vector<const T*> sources_;
