@@ -50,6 +50,7 @@
 #include <memory>
 #include <numbers>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -400,6 +401,7 @@ int main(int argc, char** argv) try {
   tacmap::library_likelihood_params library_params;
   std::string library_mode_name = "closed";
   double prior_unknown = tacmap::open_set_params{}.prior_unknown;
+  tacmap::open_set_params unknown_model;  // its prior_unknown is --prior-unknown's
   // Overrides of the scenario's knobs: empty = the scenario's value.
   struct knob {
     const char* flag;
@@ -674,6 +676,13 @@ int main(int argc, char** argv) try {
   app.add_option("--prior-unknown", prior_unknown,
                  "prior probability that the touched surface is none of the maps, in (0, 1)")
       ->capture_default_str();
+  app.add_option("--unknown-evidence-weight", unknown_model.evidence_weight,
+                 "open set: the weight a on each touch's evidence, in (0, 1] (1: memoryless)")
+      ->capture_default_str();
+  app.add_option("--unknown-support-margin", unknown_model.support_margin,
+                 "open set: the margin d, in nats, a touch's prediction support needs before it "
+                 "counts for the maps, in [0, 20] (0: memoryless)")
+      ->capture_default_str();
   app.add_flag("--quiet,-q", quiet, "no progress bar (it is drawn only when stderr is a terminal)");
   app.add_option("--scenario", scenario_name,
                  "ideal (the map's own image, a new sensor), realistic (camera map, "
@@ -790,6 +799,17 @@ int main(int argc, char** argv) try {
                                csv_number(prior_unknown) +
                                    " is not a probability in (0, 1); expected the prior that the "
                                    "touched surface is none of the maps (e.g. 0.5)");
+  unknown_model.prior_unknown = prior_unknown;
+  try {  // each field alone, so that the message names its option
+    tacmap::open_set_params{.evidence_weight = unknown_model.evidence_weight}.validate();
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--unknown-evidence-weight", e.what());
+  }
+  try {
+    tacmap::open_set_params{.support_margin = unknown_model.support_margin}.validate();
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--unknown-support-margin", e.what());
+  }
   const auto mode = parse_choice<tacmap_tools::library_mode>(
       "--library-mode", library_mode_name,
       {{"closed", tacmap_tools::library_mode::closed},
@@ -824,7 +844,7 @@ int main(int argc, char** argv) try {
     base.motion_k = motion_k;
     if (patch_spacing > 0) base.patch_spacing = patch_spacing;
     base.simulator_seed = seed;
-    base.open_set.prior_unknown = prior_unknown;
+    base.open_set = unknown_model;
     base.simulator = sim;
     base.scenario = effects;
     base.faults = faults;

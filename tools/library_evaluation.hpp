@@ -126,7 +126,8 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
                                    library_mode mode = library_mode::closed) {
   csv << "config,mode,object,sequence,touch,decided,p_true_object,p_decided,error_mm,"
          "known_error_mm,probability_within,verdict,objects_evaluated,raised_dark,p_unknown,"
-         "log_open_set_factor,open_set_verdict\n";
+         "log_open_set_factor,open_set_verdict,log_likelihood_max,log_marginal_likelihood,"
+         "log_prediction_support,entropy_nats\n";
   bool below_floor = false;
   const std::size_t k_objects = objects.size();
   std::printf(
@@ -162,16 +163,20 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
       per_object[object].add(r);
       if (!r.decided.empty()) ++confusion[object][r.decided.back()];
       for (std::size_t t = 0; t < r.touches.size(); ++t) {
-        char line[640];
-        std::snprintf(line, sizeof line,
-                      "%s,%s,%s,%zu,%zu,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%s,%zu,%d,%.6g,%.6g,%s\n",
-                      library_label(config).c_str(), to_string(mode), objects[object].name.c_str(),
-                      index, t + 1, objects[r.decided[t]].name.c_str(),
-                      r.object_probability[t][object], r.object_probability[t][r.decided[t]],
-                      r.touches[t].error_mm, r.known_object[t].error_mm,
-                      r.touches[t].probability_within, tacmap::to_string(r.touches[t].verdict),
-                      r.evaluated_objects[t], r.raised_dark ? 1 : 0, r.probability_unknown[t],
-                      r.log_open_set_factor[t], tacmap::to_string(r.open_set_verdict[t]));
+        char line[800];
+        std::snprintf(
+            line, sizeof line,
+            "%s,%s,%s,%zu,%zu,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%s,%zu,%d,%.6g,%.6g,%s,%.6g,%.6g,%.6g,"
+            "%.6g\n",
+            library_label(config).c_str(), to_string(mode), objects[object].name.c_str(), index, t + 1,
+            objects[r.decided[t]].name.c_str(), r.object_probability[t][object],
+            r.object_probability[t][r.decided[t]], r.touches[t].error_mm,
+            r.known_object[t].error_mm, r.touches[t].probability_within,
+            tacmap::to_string(r.touches[t].verdict), r.evaluated_objects[t], r.raised_dark ? 1 : 0,
+            r.probability_unknown[t], r.log_open_set_factor[t],
+            tacmap::to_string(r.open_set_verdict[t]), r.log_likelihood_max[t],
+            r.touches[t].log_marginal_likelihood, r.touches[t].log_prediction_support,
+            r.touches[t].entropy_nats);
         csv << line;
       }
       if (!quiet) std::fprintf(stderr, "\r%zu/%zu sequences", q + 1, sequences);

@@ -404,14 +404,9 @@ class basic_library_localizer {
     library_touch_result r;
     r.restarted = out.restarted;
     r.rejection = pre.rejection;
-    // The open set's population is the states evaluated: the objects not pruned.
+    // The open set weighs the touch over the states evaluated (the objects not pruned).
     const auto& grid = filter_.grid();
-    const std::vector<bool>& used = filter_.measurement_model().evaluated();
-    Eigen::Index evaluated = used.empty() ? grid.size() : 0;
-    for (std::size_t k = 0; k < used.size(); ++k)
-      if (used[k]) evaluated += grid.object_size(static_cast<Eigen::Index>(k));
-    detail::follow_touch(unknown_, out.restarted, out.report,
-                         static_cast<double>(evaluated) / static_cast<double>(grid.size()));
+    detail::follow_touch(unknown_, out.restarted, out.report);
     r.probability_unknown = unknown_.probability_unknown();
     const confidence conf =
         with_open_set(out.assessment, r.probability_unknown, config_.confidence);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sim/gecko_protocol.hpp"
@@ -20,12 +21,8 @@ namespace test_open_set {
 
 namespace {
 
-tacmap::localizer_config fast_config() {
-  tacmap::localizer_config c;
-  c.model = tacmap::measurement_kind::lite;
-  c.features = tacmap::window_features::shared_dense;
-  return c;
-}
+// The shipped measurement model: the open set's model was fitted in its units.
+tacmap::localizer_config fast_config() { return {}; }
 
 // A surface unlike the gecko: smooth random blobs (sums of Gaussians at random places), the
 // gecko map's size, fixed by `seed`.
@@ -82,13 +79,32 @@ TEST_CASE("open_set: the prior, the touches' factors and the logistic") {
   u.observe_log_factor(2.0);
   CHECK(u.probability_unknown() ==
         doctest::Approx(0.25 * std::exp(-2.0) / (1.0 + 0.25 * std::exp(-2.0))));
-  // The update report's support is that factor; a pruned library's population is the states
-  // evaluated (the uniform reference rises by 1 / fraction: the factor falls by log fraction).
+  // The update report gives the factor of eq. 1, a (S - d), from its support S alone.
   u.reset();
   tacmap::update_report report;
-  report.log_prediction_support = 1.0;
-  u.observe(report, 0.5);
-  CHECK(u.log_odds() == doctest::Approx(std::log(0.25) - 1.0 - std::log(0.5)));
+  report.log_prediction_support = 1.5;
+  report.log_likelihood_max = -10.0;  // the likelihood's level plays no part
+  report.log_evidence = -6.0;
+  const tacmap::open_set_params fitted;
+  const double a = fitted.evidence_weight, d = fitted.support_margin;
+  CHECK(u.log_factor(report) == doctest::Approx(a * (1.5 - d)));
+  report.log_likelihood_max = -30.0;
+  CHECK(u.log_factor(report) == doctest::Approx(a * (1.5 - d)));
+  u.observe(report);
+  CHECK(u.log_odds() == doctest::Approx(std::log(0.25) - a * (1.5 - d)));
+  // a = 1, d = 0: the memoryless unknown, whose factor is the support itself.
+  const tacmap::open_set memoryless(
+      {.prior_unknown = 0.2, .evidence_weight = 1.0, .support_margin = 0.0});
+  CHECK(memoryless.log_factor(report) == doctest::Approx(1.5));
+  // A touch must support the prediction by more than d to count for the maps: a first touch
+  // (S = 0, a uniform prediction) raises P(U), a touch at the margin leaves it.
+  report.log_prediction_support = 0.0;
+  CHECK(u.log_factor(report) == doctest::Approx(-a * d));
+  report.log_prediction_support = d;
+  CHECK(u.log_factor(report) == doctest::Approx(0.0));
+  // A touch that contradicted the prediction (-infinity support) is -infinity.
+  report.log_prediction_support = -std::numeric_limits<double>::infinity();
+  CHECK(u.log_factor(report) == -std::numeric_limits<double>::infinity());
   // Extreme factors neither overflow nor give NaN.
   u.observe_log_factor(1e6);
   CHECK(u.probability_unknown() >= 0.0);
@@ -128,9 +144,18 @@ TEST_CASE("open_set: a bad prior or factor is refused, naming the value") {
   CHECK(message_of([&] {
           u.observe_log_factor(std::numeric_limits<double>::quiet_NaN());
         }).find("nan") != std::string::npos);
-  CHECK(message_of([&] {
-          u.observe(tacmap::update_report{}, 0.0);
-        }).find("evaluated_fraction = 0") != std::string::npos);
+  // The model's weights, each named with its range.
+  const std::vector<std::pair<tacmap::open_set_params, std::string>> bad_models = {
+      {{.evidence_weight = 0.0}, "evidence_weight = 0; expected a weight in (0, 1]"},
+      {{.evidence_weight = 1.5}, "evidence_weight = 1.5; expected a weight in (0, 1]"},
+      {{.support_margin = -0.1}, "support_margin = -0.1; expected nats in [0, 20]"},
+      {{.support_margin = 25.0}, "support_margin = 25; expected nats in [0, 20]"},
+      {{.support_margin = std::numeric_limits<double>::quiet_NaN()}, "support_margin = nan"},
+  };
+  for (const auto& [params, expected] : bad_models) {
+    CAPTURE(expected);
+    CHECK(message_of([&] { tacmap::open_set v(params); }).find(expected) != std::string::npos);
+  }
   CHECK(u.probability_unknown() == doctest::Approx(0.5));  // unchanged by the refused calls
 }
 
@@ -175,8 +200,6 @@ TEST_CASE(
         if (r.probability_unknown > 1.0 - config.confidence.threshold)
           CHECK(r.verdict != tacmap::verdict::localized);
       }
-      // The first touch has a uniform prediction: no evidence either way.
-      CHECK(run->front().probability_unknown == doctest::Approx(0.5).epsilon(1e-6));
     }
     for (const auto& r : unknown) CHECK(r.verdict != tacmap::verdict::localized);
     CHECK(unknown.back().probability_unknown > 0.9);
@@ -206,13 +229,59 @@ TEST_CASE("localizer: P(not this object) rises on touches of another object, fal
       return moved ? right.touch(frame, *moved) : right.touch(frame);
     });
     for (const auto& r : on_other) CHECK(r.verdict != tacmap::verdict::localized);
-    CHECK(on_other.front().probability_other_object == doctest::Approx(0.5).epsilon(1e-6));
     CHECK(on_other.back().probability_other_object > 0.9);
     CHECK(on_own.back().probability_other_object < 0.01);
     CHECK(on_own.back().verdict == tacmap::verdict::localized);
     for (const auto& r : on_own)
       if (r.probability_other_object > 1.0 - config.confidence.threshold)
         CHECK(r.verdict != tacmap::verdict::localized);
+  }
+}
+
+TEST_CASE(
+    "open_set, the shipped model: noise raises P(not this object), the object's own map "
+    "lowers it, each touch by a (S - d)") {
+  // The measurement model the open set was fitted with (the default configuration). Each touch
+  // moves the log odds of "not this object" by exactly -a (S - d), S the touch's reported
+  // support: a first touch (a nearly uniform prediction, S near 0) raises P(not this object)
+  // whatever the map. A surface of random noise is nothing the gecko's touches can fit where the
+  // arm's motion says: P(not this object) ends high. On the gecko's own map it falls to nearly 0.
+  // The memoryless model (a = 1, d = 0), a factor of the wrong sign or one that ignored the
+  // support would each fail here.
+  const auto& p = tacmap_test::gecko();
+  const tacmap::localizer_config config;
+  tacmap::sim_rng rng(5);
+  tacmap::image<float> noise(p.map.rows(), p.map.cols());
+  for (Eigen::Index i = 0; i < noise.size(); ++i)
+    noise.data()[i] = static_cast<float>(rng.uniform());
+  const double prior = config.open_set.prior_unknown;
+  const double a = config.open_set.evidence_weight, d = config.open_set.support_margin;
+  const auto logit = [](double q) { return std::log(q) - std::log1p(-q); };
+  for (std::size_t q = 0; q < 2; ++q) {
+    CAPTURE(q);
+    tacmap::localizer on_noise(noise, p.mm_per_px, config), on_own(p.map, p.mm_per_px, config);
+    const auto touch = [](auto& loc) {
+      return [&loc](const auto& frame, const auto& moved) {
+        return moved ? loc.touch(frame, *moved) : loc.touch(frame);
+      };
+    };
+    const auto noisy = run_gecko_sequence(q, 120 + q, touch(on_noise));
+    const auto own = run_gecko_sequence(q, 120 + q, touch(on_own));
+    for (const auto* run : {&noisy, &own}) {
+      double before = logit(prior);
+      for (const auto& r : *run) {
+        REQUIRE(!r.restarted);
+        const double after = logit(r.probability_other_object);
+        CHECK(after - before == doctest::Approx(-a * (r.log_prediction_support - d)).epsilon(1e-6));
+        before = after;
+      }
+      CHECK(run->front().probability_other_object > prior);
+    }
+    for (const auto& r : noisy) CHECK(r.verdict != tacmap::verdict::localized);
+    CHECK(noisy.back().probability_other_object > 0.9);
+    CHECK(noisy.back().probability_other_object > noisy.front().probability_other_object);
+    CHECK(own.back().probability_other_object < 0.01);
+    CHECK(own.back().verdict == tacmap::verdict::localized);
   }
 }
 

@@ -14,40 +14,48 @@
 // log_marginal_likelihood`). The filter's belief over its own states is untouched: U is one
 // number beside it, and the filter's posterior is the posterior given K.
 //
-// The model of an unknown surface, p(z | U). A touch on a surface we hold no map of is modelled
-// as a window drawn at random, independently at each touch, from the population of windows of
-// surfaces in general; that population is fitted as the empirical distribution of the windows
-// the filter holds (every state of every map, each equally, the appearance hypotheses by their
-// prior), with the measurement model's own kernel:
+// The model of an unknown surface, p(z | U). What separates a known surface from an unknown one
+// is memory: on the object, the touches fit one surface along the arm's motions; on a surface
+// we hold no map of, each touch fits the maps only by chance. The unknown surface is modelled
+// against the population of windows the filter holds (a touch on a surface we hold no map of
+// looks like a window drawn at random from surfaces in general, and the maps are our sample of
+// those): with S_t the touch's `update_report::log_prediction_support`, log [p(z_t | K, past) /
+// ((1/N_e) sum_x p(z_t | x))] over the N_e states the update evaluated, the per-touch log Bayes
+// factor is
 //
-//   p(z | U) = (1 / N) sum_x p(z | x),
+//   log p(z_t | K, z_1..t-1) - log p(z_t | U) = a * (S_t - d),                          (1)
 //
-// the touch's likelihood at a uniformly drawn state — the same scale as the maps' likelihoods
-// (one descriptor, one tau), nothing tuned to a case. Its log is what the filter already computes
-// as the reference of `update_report::log_prediction_support`, so the per-touch log Bayes factor
-// is that support:
+// computed from the update's own report: no extra pass. a = 1, d = 0 is the memoryless model,
+// p(z | U) = (1/N_e) sum_x p(z | x) afresh at each touch: its factor is the support itself. That
+// model is too easily convinced, for a measured reason: a chance fit persists. A touch near the
+// last one fits near the last fit, so supports of a nat or two on an unknown surface are
+// neither rare nor independent draws, and a few of them looked like a known object. Model (1)
+// answers with two numbers. d: an unknown surface explains a touch e^d times better than a
+// random window of the maps (its touches follow their own chance fits), so a touch must support
+// the prediction by more than d nats to count for the maps; every first touch (S = 0, a uniform
+// prediction) raises P(U) a little. a < 1: each touch's support is discounted for the
+// dependence between touches.
 //
-//   log p(z_t | K, z_1..t-1) - log p(z_t | U) = log_prediction_support_t,
-//
-// and U costs no extra pass over the grid. What distinguishes the two is memory: under K the
-// touches must fit one surface along the arm's motions, under U each touch is new. On the first
-// touch (a uniform prediction) the factor is exactly 1 and P(U) stays at its prior; each later
-// touch that lands where the prediction expected it (support > 0) lowers P(U), each that fits the
-// map at large better than where the motion says it should be raises it. A touch on a known
-// object soon gives supports of several nats (up to log N); on an unknown one the prediction is a
-// chance fit, and the supports hover around or below zero.
-//
-// Where the filter evaluates only part of its states (a library's pruned objects, the tracked
-// path), the population is the states evaluated (`library_likelihood` prunes objects the touches
-// have ruled out; the caller gives the fraction of the states evaluated, see `observe`). A
-// restart of the filter from a uniform belief (localizer.hpp, `predict_and_update`) restarts the
-// question too: P(U) goes back to its prior.
+// a and d are fitted, not chosen: maximum likelihood of "known" against "unknown" at every
+// touch of simulated sequences (logistic regression on the cumulative sums of S and of the
+// touches; tacmap-evaluate's --library-mode closed and own-map for "known", left-out and
+// wrong-object for "unknown"; realistic scenario; the evaluation photographs, seeds 1-3; the
+// classes weighed equally, so that the fit's prior is 0.5), with the shipped measurement model.
+// S is a ratio of one model's likelihoods, with no reference level, so the fit carries over to
+// other descriptors better than a fitted likelihood level would (a fitted level of the maps'
+// mean likelihood, tried beside S, helped a little on the evaluation photographs, not on the
+// held-out ones, and is 8 nats off for SIFT-lite); a model whose likelihood is much sharper or
+// flatter than the shipped one's changes the scale of S and deserves its own fit (the script
+// scripts/fit_open_set.py reads tacmap-evaluate's CSVs and prints a and d).
 //
 // The prior P(U) is a configured value (`open_set_params::prior_unknown`), what the robot
 // believes before touching: the default 0.5 says "as likely something we never photographed as
 // one of the photographs" — the most ignorant split between the two, not a value fitted to an
 // evaluation. The verdict (confidence.hpp) then needs P(K) x P(right position | K) >= threshold:
-// the object and the position must beat the unknown (`with_open_set`).
+// the object and the position must beat the unknown (`with_open_set`). Where the filter evaluates
+// only part of its states (a library's pruned objects, the tracked path), S is over the states
+// evaluated, as in the fit. A restart of the filter from a uniform belief
+// (localizer.hpp, `predict_and_update`) restarts the question too: P(U) goes back to its prior.
 #pragma once
 
 #include <cmath>
@@ -60,19 +68,33 @@
 
 namespace tacmap {
 
-/// Configuration of the open-set hypothesis (see the file comment).
+/// Configuration of the open-set hypothesis (see the file comment, eq. 1).
 struct open_set_params {
   /// P(U): the prior probability that the touched surface is none of the maps, in (0, 1). 0.5:
   /// as likely unknown as known (the most ignorant split). Smaller trusts the library more: the
   /// touches then need less support before "localized", and an unknown object needs more to
   /// be called one.
   double prior_unknown = 0.5;
+  /// a in eq. 1, in (0, 1]: how much of each touch's support counts, a discount for touches
+  /// that are not independent (a chance fit persists). 1: the memoryless model.
+  double evidence_weight = 0.645;
+  /// d in eq. 1, in [0, 20] nats: the support a touch needs before it counts for the maps (an
+  /// unknown surface's own chance fits). 0: the memoryless model.
+  double support_margin = 0.769;
 
   void validate() const {
     if (!(std::isfinite(prior_unknown) && prior_unknown > 0.0 && prior_unknown < 1.0))
       detail::fail("open_set_params: prior_unknown = ", prior_unknown,
                    "; expected a probability in (0, 1) that the touched surface is none of the "
                    "maps (e.g. 0.5: as likely unknown as known)");
+    if (!(std::isfinite(evidence_weight) && evidence_weight > 0.0 && evidence_weight <= 1.0))
+      detail::fail("open_set_params: evidence_weight = ", evidence_weight,
+                   "; expected a weight in (0, 1] on each touch's evidence (1: every touch "
+                   "independent; the fitted default is 0.645)");
+    if (!(std::isfinite(support_margin) && support_margin >= 0.0 && support_margin <= 20.0))
+      detail::fail("open_set_params: support_margin = ", support_margin,
+                   "; expected nats in [0, 20] a touch's prediction support needs before it "
+                   "counts for the maps (0: the memoryless model; the fitted default is 0.769)");
   }
 };
 
@@ -80,7 +102,7 @@ struct open_set_params {
 /// them", updated by each touch's log Bayes factor (see the file comment).
 class open_set {
  public:
-  /// Throws std::invalid_argument for an invalid prior.
+  /// Throws std::invalid_argument for invalid parameters.
   explicit open_set(const open_set_params& params = {}) : params_(params) {
     params_.validate();
     reset();
@@ -89,17 +111,14 @@ class open_set {
   /// Back to the prior (a new exploration, or the filter restarted from a uniform belief).
   void reset() { log_odds_ = std::log(params_.prior_unknown) - std::log1p(-params_.prior_unknown); }
 
-  /// One touch of the filter, as its update reported it. `evaluated_fraction`: the fraction of
-  /// the filter's states its likelihood was evaluated at (in (0, 1]; 1 unless a library pruned
-  /// objects): the unknown surface's population is those states (see the file comment).
-  void observe(const update_report& report, double evaluated_fraction = 1.0) {
-    if (!(evaluated_fraction > 0.0 && evaluated_fraction <= 1.0))
-      detail::fail("open_set::observe: evaluated_fraction = ", evaluated_fraction,
-                   "; expected the fraction of the states evaluated, in (0, 1]");
-    // support = log [Z / ((1/N) sum_{evaluated} p)]; over the evaluated states only the uniform
-    // reference is (1/N_e) sum_{evaluated} p, larger by N / N_e.
-    observe_log_factor(report.log_prediction_support + std::log(evaluated_fraction));
+  /// The log Bayes factor of one touch (eq. 1) from its update's report (the support over the
+  /// states the update evaluated); -infinity for a touch that contradicted the prediction.
+  [[nodiscard]] double log_factor(const update_report& report) const {
+    return params_.evidence_weight * (report.log_prediction_support - params_.support_margin);
   }
+
+  /// One touch of the filter, as its update reported it.
+  void observe(const update_report& report) { observe_log_factor(log_factor(report)); }
 
   /// One touch given directly as log p(z | K, past) - log p(z | U) (finite, or -infinity when
   /// the touch ruled out every state the prediction allowed).
@@ -129,15 +148,15 @@ class open_set {
 
 namespace detail {
 /// A front door's touch seen by its open set: a filter that restarted from a uniform belief
-/// restarts the question (back to the prior; the restarted update's prediction was uniform, a
-/// factor of 1); otherwise an update (none for a rejected frame) adds its factor.
+/// restarts the question (back to the prior; the touch that restarted it is not weighed, its
+/// report describes the prediction that failed); otherwise an update (none for a rejected frame)
+/// adds its factor.
 inline void follow_touch(open_set& unknown, bool restarted,
-                         const std::optional<update_report>& report,
-                         double evaluated_fraction = 1.0) {
+                         const std::optional<update_report>& report) {
   if (restarted)
     unknown.reset();
   else if (report)
-    unknown.observe(*report, evaluated_fraction);
+    unknown.observe(*report);
 }
 }  // namespace detail
 

@@ -61,6 +61,9 @@ struct library_sequence_result {
   std::vector<double> probability_unknown;
   std::vector<double> log_open_set_factor;
   std::vector<tacmap::verdict> open_set_verdict;
+  /// After each touch: the touch's largest log-likelihood over the states evaluated
+  /// (`update_report::log_likelihood_max`, 0 for a rejected frame).
+  std::vector<double> log_likelihood_max;
   bool open_set = false;      ///< `run_left_out`: the touched object was not in the library
   bool wrong_object = false;  ///< `run_wrong_object`: touches on another object's single map
 
@@ -300,6 +303,7 @@ class library_experiment {
     rec.rejection = pre.rejection;
     std::optional<update_report> report;
     double log_factor = 0.0;
+    double best = 0.0;
     if (pre.accepted()) {
       const auto z = [&] {
         if constexpr (library)
@@ -314,20 +318,15 @@ class library_experiment {
         unknown.reset();
         rec.lost_track = true;
         report = f.update(z);
+        report->log_prediction_support = -std::numeric_limits<double>::infinity();
       }
       rec.log_marginal_likelihood = report->log_marginal_likelihood();
+      best = report->log_likelihood_max;
       rec.log_prediction_support = report->log_prediction_support;
       rec.contradicted = report->log_prediction_support < config_.confidence.contradiction;
-      double fraction = 1.0;
-      if constexpr (library) {
-        Eigen::Index evaluated_states = 0;
-        const auto& evaluated = f.measurement_model().evaluated();
-        for (Eigen::Index k = 0; k < f.grid().objects(); ++k)
-          if (evaluated[static_cast<std::size_t>(k)]) evaluated_states += f.grid().object_size(k);
-        fraction = static_cast<double>(evaluated_states) / static_cast<double>(f.grid().size());
-      }
+      // As the front doors weigh it (detail::follow_touch): a restart restarts the question.
       const double before = unknown.log_odds();
-      unknown.observe(*report, fraction);
+      if (!rec.lost_track) unknown.observe(*report);
       log_factor = before - unknown.log_odds();
     }
     const auto est = f.estimate();
@@ -362,6 +361,7 @@ class library_experiment {
     out.decided.push_back(decided);
     out.probability_unknown.push_back(pu);
     out.log_open_set_factor.push_back(log_factor);
+    out.log_likelihood_max.push_back(best);
     out.open_set_verdict.push_back(with_open_set(conf, pu, config_.confidence).verdict);
     std::size_t evaluated = 1;
     if constexpr (library) {
