@@ -220,6 +220,8 @@ inline std::vector<std::string> localizer_config_fields() {
           "headings",
           "turn_sigma_rad",
           "prior_unknown",
+          "unknown_evidence_weight",
+          "unknown_support_margin",
           "appearance",
           "appearance_switch",
           "lost_probability",

@@ -50,6 +50,46 @@ auto locked(locked_front_door<Impl>& self, F&& f) {
   return f(self.impl);
 }
 
+/// The members Localizer and LibraryLocalizer share, bound on `cls` (a py::class_ of `Holder`,
+/// a locked_front_door): touches, restarts, warnings, sensor_calibration,
+/// reset_sensor_calibration and sensor. `restarts_doc` says what a restart goes back to.
+template <class Holder, class PyClass>
+void def_front_door_members(PyClass& cls, const char* restarts_doc) {
+  cls.def_property_readonly(
+         "touches",
+         [](Holder& self) { return locked(self, [](auto& loc) { return loc.touches(); }); },
+         "Touches used (accepted frames) since construction or reset().")
+      .def_property_readonly(
+          "restarts",
+          [](Holder& self) { return locked(self, [](auto& loc) { return loc.restarts(); }); },
+          restarts_doc)
+      .def_property_readonly(
+          "warnings",
+          [](Holder& self) {
+            return std::vector<std::string>(self.impl.warnings().begin(),
+                                            self.impl.warnings().end());
+          },
+          "What the localizer could not do as well as it should, in words (a list of str, "
+          "from construction): e.g. a photograph coarser than the working resolution and what "
+          "that costs in accuracy. Empty when nothing is amiss; tacmap prints nothing, show "
+          "them to the user.")
+      .def_property_readonly(
+          "sensor_calibration",
+          [](Holder& self) -> std::optional<self_calibration> {
+            return locked(self, [](auto& loc) -> std::optional<self_calibration> {
+              if (const self_calibration* c = loc.sensor_calibration()) return *c;
+              return std::nullopt;
+            });
+          },
+          "The sensor's self-calibration (a SensorCalibration copy), or None when "
+          "config.calibrate_sensor is off.")
+      .def(
+          "reset_sensor_calibration",
+          [](Holder& self) { locked(self, [](auto& loc) { loc.reset_sensor_calibration(); }); },
+          "Forgets what the self-calibration learnt (a new or repaired sensor); reset() keeps "
+          "it.");
+}
+
 inline std::string sensor_shape(const taxel_geometry& s, const char* owner) {
   return "(" + std::to_string(s.rows) + ", " + std::to_string(s.cols) + ") (the " + owner +
          "'s sensor: " + std::to_string(s.rows) + " x " + std::to_string(s.cols) + " taxels)";

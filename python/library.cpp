@@ -279,7 +279,10 @@ void bind_library(py::module_& m) {
       });
 
   // ---- LibraryLocalizer ----
-  py::class_<py_library>(m, "LibraryLocalizer", library_doc)
+  py::class_<py_library> library_class(m, "LibraryLocalizer", library_doc);
+  def_front_door_members<py_library>(
+      library_class, "Restarts from each object's prior since construction or reset().");
+  library_class
       .def(py::init([](const py::object& maps, std::optional<localizer_config> config,
                        std::optional<taxel_geometry> sensor,
                        std::optional<std::vector<double>> prior, std::optional<double> mm_per_px,
@@ -410,13 +413,6 @@ void bind_library(py::module_& m) {
           "Starts a new exploration: each object's prior, a uniform belief on each map, no "
           "previous pose.")
       .def(
-          "reset_sensor_calibration",
-          [](py_library& self) {
-            locked(self, [](library_localizer& lib) { lib.reset_sensor_calibration(); });
-          },
-          "Forgets what the self-calibration learnt (a new or repaired sensor); reset() keeps "
-          "it.")
-      .def(
           "object_belief",
           [](py_library& self, const py::object& k) {
             const Eigen::Index i = object_of(self, k, "LibraryLocalizer.object_belief");
@@ -446,18 +442,6 @@ void bind_library(py::module_& m) {
           "How many objects the library holds.")
       .def("__len__", [](py_library& self) { return self.names.size(); })
       .def_property_readonly(
-          "touches",
-          [](py_library& self) {
-            return locked(self, [](library_localizer& lib) { return lib.touches(); });
-          },
-          "Touches used (accepted frames) since construction or reset().")
-      .def_property_readonly(
-          "restarts",
-          [](py_library& self) {
-            return locked(self, [](library_localizer& lib) { return lib.restarts(); });
-          },
-          "Restarts from each object's prior since construction or reset().")
-      .def_property_readonly(
           "probability_unknown",
           [](py_library& self) {
             return locked(self, [](library_localizer& lib) { return lib.probability_unknown(); });
@@ -469,24 +453,6 @@ void bind_library(py::module_& m) {
       .def_property_readonly(
           "photo_mm_per_px", [](py_library& self) { return self.photo_mm_per_px; },
           "Each photograph's own scale, as given (a list in the library's order).")
-      .def_property_readonly(
-          "warnings",
-          [](py_library& self) {
-            return std::vector<std::string>(self.impl.warnings().begin(),
-                                            self.impl.warnings().end());
-          },
-          "What the library could not do as well as it should, in words (a list of str): e.g. "
-          "a photograph coarser than the working resolution. Empty when nothing is amiss.")
-      .def_property_readonly(
-          "sensor_calibration",
-          [](py_library& self) -> std::optional<self_calibration> {
-            return locked(self, [](library_localizer& lib) -> std::optional<self_calibration> {
-              if (const self_calibration* c = lib.sensor_calibration()) return *c;
-              return std::nullopt;
-            });
-          },
-          "The sensor's self-calibration (a SensorCalibration copy), or None when "
-          "config.calibrate_sensor is off.")
       .def_property_readonly(
           "config", [](py_library& self) { return self.impl.config(); },
           "The configuration (a copy), with preprocessing.mm_per_px set to the library's scale.")

@@ -277,7 +277,22 @@ void bind_config(py::module_& m) {
           [](localizer_config& c, double p) { c.open_set.prior_unknown = p; },
           "The prior probability, in (0, 1), that the touched surface is not the map (C++ "
           "open_set_params::prior_unknown): weighed against the map by the touches "
-          "(TouchResult.probability_other_object). 0.5: as likely unknown as known.");
+          "(TouchResult.probability_other_object). 0.5: as likely unknown as known.")
+      .def_property(
+          "unknown_evidence_weight",
+          [](const localizer_config& c) { return c.open_set.evidence_weight; },
+          [](localizer_config& c, double a) { c.open_set.evidence_weight = a; },
+          "a in (0, 1] of the unknown surface's model (C++ open_set_params::evidence_weight): "
+          "each touch moves the log odds of 'not this object' by -a (S - d), S its "
+          "log_prediction_support. Fitted: 0.645; 1 with unknown_support_margin 0 is the "
+          "memoryless model.")
+      .def_property(
+          "unknown_support_margin",
+          [](const localizer_config& c) { return c.open_set.support_margin; },
+          [](localizer_config& c, double d) { c.open_set.support_margin = d; },
+          "d in [0, 20] nats of the unknown surface's model (C++ "
+          "open_set_params::support_margin): the support a touch needs before it counts for "
+          "the map. Fitted: 0.769.");
   enum_property(cfg, "appearance", &localizer_config::appearance, appearance_names_,
                 "How the map's brightness relates to the object's height: 'fixed' (raised "
                 "parts look bright, as the paper's gecko), 'latent' (both relations are "
@@ -578,7 +593,12 @@ void bind_localizer(py::module_& m) {
       "inverted, a step that is not a finite positive number, or more than a million points.");
 
   // ---- Localizer ----
-  py::class_<py_localizer>(m, "Localizer", localizer_doc)
+  py::class_<py_localizer> localizer_class(m, "Localizer", localizer_doc);
+  def_front_door_members<py_localizer>(
+      localizer_class,
+      "Restarts from a uniform belief since construction or reset() (TouchResult.restarted "
+      "says when: the motion carried every state off the map, or a touch ruled them all out).");
+  localizer_class
       .def(py::init([](const py::object& map, double mm_per_px,
                        std::optional<localizer_config> config,
                        std::optional<taxel_geometry> sensor) {
@@ -762,12 +782,6 @@ void bind_localizer(py::module_& m) {
           "(left, right, bottom, top) in mm of the map image, for imshow(loc.map, "
           "extent=loc.map_extent_mm).")
       .def_property_readonly(
-          "touches",
-          [](py_localizer& self) {
-            return locked(self, [](localizer& loc) { return loc.touches(); });
-          },
-          "Touches used (accepted frames) since construction or reset().")
-      .def_property_readonly(
           "window",
           [](py_localizer& self) {
             return py::make_tuple(self.impl.window().width, self.impl.window().height);
@@ -785,41 +799,6 @@ void bind_localizer(py::module_& m) {
           "photo_mm_per_px", [](py_localizer& self) { return self.impl.photo_mm_per_px(); },
           "The photograph's own scale, as given to the constructor (mm_per_px is the working "
           "resolution the map is matched at; positions are millimetres either way).")
-      .def_property_readonly(
-          "warnings",
-          [](py_localizer& self) {
-            return std::vector<std::string>(self.impl.warnings().begin(),
-                                            self.impl.warnings().end());
-          },
-          "What the localizer could not do as well as it should, in words (a list of str, "
-          "from construction): e.g. a photograph coarser than the working resolution and what "
-          "that costs in accuracy. Empty when nothing is amiss; tacmap prints nothing, show "
-          "them to the user.")
-      .def_property_readonly(
-          "restarts",
-          [](py_localizer& self) {
-            return locked(self, [](localizer& loc) { return loc.restarts(); });
-          },
-          "Restarts from a uniform belief since construction or reset() (TouchResult.restarted "
-          "says when: the motion carried every state off the map, or a touch ruled them all "
-          "out).")
-      .def_property_readonly(
-          "sensor_calibration",
-          [](py_localizer& self) -> std::optional<self_calibration> {
-            return locked(self, [](localizer& loc) -> std::optional<self_calibration> {
-              if (const self_calibration* c = loc.sensor_calibration()) return *c;
-              return std::nullopt;
-            });
-          },
-          "The sensor's self-calibration (a SensorCalibration copy), or None when "
-          "config.calibrate_sensor is off.")
-      .def(
-          "reset_sensor_calibration",
-          [](py_localizer& self) {
-            locked(self, [](localizer& loc) { loc.reset_sensor_calibration(); });
-          },
-          "Forgets what the self-calibration learnt (a new or repaired sensor); reset() keeps "
-          "it.")
       .def_property_readonly(
           "sensor", [](py_localizer& self) { return self.impl.sensor(); },
           "The sensor's geometry (a TaxelGeometry copy).")

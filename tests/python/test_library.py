@@ -43,6 +43,22 @@ def check_sums(test, r):
     test.assertEqual(r.object, int(np.argmax(r.object_probability)))
 
 
+def check_open_set_steps(test, results, config):
+    """From the prior, each touch moves the log odds of "none of these" by -a (S - d): the model
+    of an unknown surface (a, d: config.unknown_evidence_weight, unknown_support_margin), S the
+    touch's reported log_prediction_support."""
+    def logit(q):
+        return math.log(q) - math.log1p(-q)
+
+    a, d = config.unknown_evidence_weight, config.unknown_support_margin
+    before = logit(config.prior_unknown)
+    for r in results:
+        test.assertFalse(r.restarted)
+        after = logit(r.probability_unknown)
+        test.assertAlmostEqual(after - before, -a * (r.log_prediction_support - d), places=5)
+        before = after
+
+
 class TestLibraryLocalizer(unittest.TestCase):
     def test_one_object_library_runs_the_localizers_filter(self):
         # A library of one map is the Localizer's filter over one block: the same positions,
@@ -81,8 +97,9 @@ class TestLibraryLocalizer(unittest.TestCase):
             lib = tacmap.LibraryLocalizer(maps, fast_config())
             self.assertEqual(lib.names, [m[0] for m in maps])
             results, truths = library_sequence(lib, simulator(30), 1)
-            # The first touch's prediction is uniform: no evidence of "none of these" yet.
-            self.assertAlmostEqual(results[0].probability_unknown, 0.5, places=6)
+            # Each touch moves the log odds of "none of these" by -a (S - d) (the fitted
+            # model of an unknown surface), S the touch's reported support.
+            check_open_set_steps(self, results, fast_config())
             for r in results:
                 check_sums(self, r)
             last = results[-1]
@@ -110,11 +127,19 @@ class TestLibraryLocalizer(unittest.TestCase):
             check_sums(self, r)
             self.assertNotEqual(r.verdict, "localized")
         self.assertGreater(results[-1].probability_unknown, 0.9)
-        # The prior is configured: the first touch says it back.
-        lib = tacmap.LibraryLocalizer([("gecko", p.map, p.mm_per_px)],
-                                      fast_config(prior_unknown=0.2))
+        # The prior is configured: the first touch starts from it.
+        config = fast_config(prior_unknown=0.2)
+        lib = tacmap.LibraryLocalizer([("gecko", p.map, p.mm_per_px)], config)
         r = lib.touch(simulator(31).render(*p.locations[0]))
-        self.assertAlmostEqual(r.probability_unknown, 0.2, places=6)
+        check_open_set_steps(self, [r], config)
+        # The memoryless model (a = 1, d = 0): a first touch's uniform prediction leaves it.
+        config = fast_config(prior_unknown=0.2, unknown_evidence_weight=1.0,
+                             unknown_support_margin=0.0)
+        self.assertEqual((config.unknown_evidence_weight, config.unknown_support_margin),
+                         (1.0, 0.0))
+        lib = tacmap.LibraryLocalizer([("gecko", p.map, p.mm_per_px)], config)
+        r = lib.touch(simulator(31).render(*p.locations[0]))
+        check_open_set_steps(self, [r], config)
         # Object priors are taken (and, normalised, checked by the C++ library).
         lib = tacmap.LibraryLocalizer([("gecko", p.map, p.mm_per_px),
                                        ("blobs", blobs(p.map.shape, 5), p.mm_per_px)],
