@@ -168,8 +168,8 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
             line, sizeof line,
             "%s,%s,%s,%zu,%zu,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%s,%zu,%d,%.6g,%.6g,%s,%.6g,%.6g,%.6g,"
             "%.6g\n",
-            library_label(config).c_str(), to_string(mode), objects[object].name.c_str(), index, t + 1,
-            objects[r.decided[t]].name.c_str(), r.object_probability[t][object],
+            library_label(config).c_str(), to_string(mode), objects[object].name.c_str(), index,
+            t + 1, objects[r.decided[t]].name.c_str(), r.object_probability[t][object],
             r.object_probability[t][r.decided[t]], r.touches[t].error_mm,
             r.known_object[t].error_mm, r.touches[t].probability_within,
             tacmap::to_string(r.touches[t].verdict), r.evaluated_objects[t], r.raised_dark ? 1 : 0,
