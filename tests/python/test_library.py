@@ -22,16 +22,8 @@ from test_tacmap import fast_config, gecko, simulator
 blobs = test_tacmap.TestOpenSet.blobs
 
 
-def library_sequence(lib, sim, sequence, touch=None):
-    """Touches every step of a gecko sequence on a LibraryLocalizer; results and truths."""
-    p = gecko()
-    results, truths = [], []
-    for t, step in enumerate(p.sequences[sequence]):
-        truth = p.locations[step.location]
-        frame = sim.render(truth[0], truth[1])
-        results.append(lib.touch(frame, step.measured_motion if t > 0 else None))
-        truths.append(truth)
-    return results, truths
+# A library touches as a Localizer does (touch(frame, motion)): the same sequence driver.
+library_sequence = test_tacmap.run_sequence
 
 
 def check_sums(test, r):
