@@ -14,7 +14,8 @@ Each block's info string says what it is and how it is checked:
   text    output or prose: not checked.
 A block without an info string is an error: say what it is.
 
-Usage: check_snippets.py --source-dir DIR --cxx CXX [--include DIR] [--system-include DIR ...]
+Usage: check_snippets.py --source-dir DIR --cxx CXX [--include DIR] [--define NAME=VALUE ...]
+       [--system-include DIR ...]
        [--python PY]
        [--pythonpath DIR] [--tools-dir DIR] [--jobs N] [FILE.md ...]
 """
@@ -71,7 +72,7 @@ def check_cpp(block: Block, args) -> str | None:
         src = pathlib.Path(tmp) / "snippet.cpp"
         src.write_text(block.text, encoding="utf-8")
         cmd = [args.cxx, "-std=c++20", "-fsyntax-only", "-Wall", "-Wextra", "-Werror"]
-        cmd += [f"-I{d}" for d in args.include if d]
+        cmd += [f"-I{d}" for d in args.include if d] + [f"-D{d}" for d in args.define if d]
         # The compiler's own folders stay out: -isystem /usr/include would break libstdc++'s
         # #include_next.
         cmd += [f"-isystem{d}" for d in args.system_include
@@ -183,6 +184,9 @@ def main() -> int:
     ap.add_argument("--source-dir", required=True)
     ap.add_argument("--cxx", default="c++")
     ap.add_argument("--include", action="append", default=[], help="tacmap's include folder")
+    ap.add_argument("--define", action="append", default=[],
+                    help="NAME=VALUE for the C++ blocks (e.g. TACMAP_PRECOMPILED=1: compiled as a "
+                         "consumer of tacmap::precompiled sees the headers)")
     ap.add_argument("--system-include", action="append", default=[],
                     help="a dependency's include folder (its warnings are not ours)")
     ap.add_argument("--python", default=sys.executable)
