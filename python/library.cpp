@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
-#include <numbers>
 #include <optional>
 #include <span>
 #include <string>
@@ -23,8 +22,7 @@ namespace tacmap::python {
 namespace {
 
 // The C++ library localizer, its lock, and what the Python one adds: the maps' names and own
-// scales, and the arm's last pose for touch_at (the C++ library takes odometry only; touch_at
-// turns poses into it as Localizer.touch_at does with a known heading).
+// scales.
 struct py_library : locked_front_door<library_localizer> {
   py_library(const std::vector<library_map>& maps, localizer_config config, taxel_geometry geometry,
              std::vector<double> prior, std::optional<double> mm_per_px, executor_ref executor)
@@ -39,7 +37,6 @@ struct py_library : locked_front_door<library_localizer> {
   taxel_geometry sensor;  // the C++ library keeps it private
   std::vector<std::string> names;
   std::vector<double> photo_mm_per_px;
-  std::optional<arm_pose> last_pose;  // guarded by mutex, as impl
 };
 
 constexpr const char* owner = "library";
@@ -139,33 +136,6 @@ Eigen::Index object_of(const py_library& self, const py::object& k, const std::s
     throw py::index_error(what + ": object " + std::to_string(i) + "; expected 0 .. " +
                           std::to_string(n - 1) + " (the library's objects)");
   return i;
-}
-
-// A touch of the library with the arm's pose `where` (a known heading, as Localizer.touch_at
-// with headings = 0): the motion since the previous touch_at becomes the odometry. `touch(m)`
-// touches with motion m (or none); the pose is kept only when the touch went through.
-template <class Touch>
-library_touch_result touch_at_pose(py_library& self, const arm_pose& where, Touch&& touch) {
-  if (!(std::isfinite(where.x_mm) && std::isfinite(where.y_mm) && std::isfinite(where.theta_rad)))
-    detail::fail("LibraryLocalizer.touch_at: the arm's pose (", where.x_mm, ", ", where.y_mm,
-                 ") mm, ", where.theta_rad,
-                 " rad is not finite; expected finite millimetres and radians — the position "
-                 "source delivered an invalid sample");
-  std::optional<odometry> moved;
-  if (self.last_pose) {
-    const double dx = where.x_mm - self.last_pose->x_mm, dy = where.y_mm - self.last_pose->y_mm;
-    detail::check_arm_motion(*self.last_pose, where, dx, dy);
-    const double turn = wrap_angle(where.theta_rad - self.last_pose->theta_rad);
-    if (std::abs(turn) > 5.0 * std::numbers::pi / 180.0)
-      detail::fail("LibraryLocalizer.touch_at: the arm's yaw changed by ",
-                   turn * 180.0 / std::numbers::pi,
-                   " degrees since the previous touch, but a library is localized with a known, "
-                   "fixed heading; keep the sensor's yaw within 5 degrees between touches");
-    moved = odometry{.dx_mm = dx, .dy_mm = dy};
-  }
-  library_touch_result r = touch(moved);
-  self.last_pose = where;
-  return r;
 }
 
 // touch(moved) of a motion given from Python: none, (dx, dy), or (du, dv, 0) (a known heading:
@@ -358,10 +328,7 @@ void bind_library(py::module_& m) {
             const tactile_frame f =
                 frame_of(self.sensor, frame, "LibraryLocalizer.touch_at: frame", owner);
             return locked(self, [&](library_localizer& lib) {
-              return touch_at_pose(self, {.x_mm = x_mm, .y_mm = y_mm, .theta_rad = theta_rad},
-                                   [&](const std::optional<odometry>& mv) {
-                                     return mv ? lib.touch(f, *mv) : lib.touch(f);
-                                   });
+              return lib.touch_at(f, {.x_mm = x_mm, .y_mm = y_mm, .theta_rad = theta_rad});
             });
           },
           py::arg("frame"), py::arg("x_mm"), py::arg("y_mm"), py::arg("theta_rad") = 0.0,
@@ -377,10 +344,7 @@ void bind_library(py::module_& m) {
                 burst_of(self.sensor, frames, "LibraryLocalizer.touch_at_burst", owner);
             const std::span<const tactile_frame> view(burst);
             return locked(self, [&](library_localizer& lib) {
-              return touch_at_pose(self, {.x_mm = x_mm, .y_mm = y_mm, .theta_rad = theta_rad},
-                                   [&](const std::optional<odometry>& mv) {
-                                     return mv ? lib.touch(view, *mv) : lib.touch(view);
-                                   });
+              return lib.touch_at(view, {.x_mm = x_mm, .y_mm = y_mm, .theta_rad = theta_rad});
             });
           },
           py::arg("frames"), py::arg("x_mm"), py::arg("y_mm"), py::arg("theta_rad") = 0.0,
@@ -404,12 +368,7 @@ void bind_library(py::module_& m) {
           "belief unchanged. Arguments and errors as Localizer.next_touch.")
       .def(
           "reset",
-          [](py_library& self) {
-            locked(self, [&](library_localizer& lib) {
-              lib.reset();
-              self.last_pose.reset();
-            });
-          },
+          [](py_library& self) { locked(self, [](library_localizer& lib) { lib.reset(); }); },
           "Starts a new exploration: each object's prior, a uniform belief on each map, no "
           "previous pose.")
       .def(

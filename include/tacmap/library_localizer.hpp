@@ -24,6 +24,7 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <numbers>
 #include <optional>
 #include <span>
 #include <string>
@@ -37,6 +38,7 @@
 #include "tacmap/grid/latent_grid.hpp"
 #include "tacmap/grid/library_grid.hpp"
 #include "tacmap/grid/planar_grid.hpp"
+#include "tacmap/grid/pose_grid.hpp"
 #include "tacmap/image.hpp"
 #include "tacmap/localizer.hpp"
 #include "tacmap/measurement/appearance_likelihood.hpp"
@@ -314,13 +316,48 @@ class basic_library_localizer {
                                     [&](const tactile_frame& f) { return touch(f, moved); });
   }
 
-  /// Starts a new exploration: each object's prior, a uniform belief on each map.
+  /// A touch with the arm's pose (its own frame, axes parallel to the maps': see `arm_pose`):
+  /// the motion since the previous `touch_at` becomes the odometry, as
+  /// `basic_localizer::touch_at` with a known heading. The yaw may not change by more than 5
+  /// degrees between touches (a library is localized with a known heading). The pose is kept
+  /// only when the touch went through; `reset()` forgets it.
+  library_touch_result touch_at(const tactile_frame& frame, const arm_pose& where) {
+    if (!(std::isfinite(where.x_mm) && std::isfinite(where.y_mm) && std::isfinite(where.theta_rad)))
+      detail::fail("library_localizer::touch_at: the arm's pose (", where.x_mm, ", ", where.y_mm,
+                   ") mm, ", where.theta_rad,
+                   " rad is not finite; expected finite millimetres and radians — the position "
+                   "source delivered an invalid sample");
+    std::optional<odometry> moved;
+    if (last_pose_) {
+      const double dx = where.x_mm - last_pose_->x_mm, dy = where.y_mm - last_pose_->y_mm;
+      detail::check_arm_motion(*last_pose_, where, dx, dy);
+      const double turn = pose_grid<float>::wrap_angle(where.theta_rad - last_pose_->theta_rad);
+      if (std::abs(turn) > 5.0 * std::numbers::pi / 180.0)
+        detail::fail("library_localizer::touch_at: the arm's yaw changed by ",
+                     turn * 180.0 / std::numbers::pi,
+                     " degrees since the previous touch, but a library is localized with a "
+                     "known, fixed heading; keep the sensor's yaw within 5 degrees between "
+                     "touches");
+      moved = odometry{.dx_mm = dx, .dy_mm = dy};
+    }
+    library_touch_result r = step(frame, moved);
+    last_pose_ = where;
+    return r;
+  }
+  library_touch_result touch_at(std::span<const tactile_frame> burst, const arm_pose& where) {
+    return detail::touch_with_burst(burst, config_.burst,
+                                    [&](const tactile_frame& f) { return touch_at(f, where); });
+  }
+
+  /// Starts a new exploration: each object's prior, a uniform belief on each map, no previous
+  /// `touch_at` pose.
   void reset() {
     filter_.reset();
     calls_ = 0;
     touches_ = 0;
     restarts_ = 0;
     unknown_.reset();
+    last_pose_.reset();
   }
 
   /// The sensor's self-calibration (see `basic_localizer::sensor_calibration`), or nullptr.
@@ -436,6 +473,7 @@ class basic_library_localizer {
   std::size_t restarts_ = 0;
   detail::sensor_correction correction_{config_.calibrate_sensor, sensor_};
   open_set unknown_{config_.open_set};  // P(none of these)
+  std::optional<arm_pose> last_pose_;   // touch_at's previous pose
 };
 
 /// The library front door with the shipped models (`configured_models`).

@@ -77,6 +77,57 @@ TEST_CASE("library_localizer: touches on the gecko recognise it among other maps
   CHECK(loc.filter().estimate().object_probability[0] == doctest::Approx(1.0 / 3.0));
 }
 
+TEST_CASE("library_localizer: touch_at turns the arm's poses into the same odometry") {
+  // The same gecko sequence given as motions and as the arm's poses (offset by an arbitrary
+  // origin): the same beliefs touch for touch. A refused pose changes nothing and is not kept.
+  const auto& p = tacmap_test::gecko();
+  tacmap::library_localizer by_motion(gecko_library(), fast_library_config());
+  tacmap::library_localizer by_pose(gecko_library(), fast_library_config());
+  tacmap::tactile_simulator sim(p.relief_mm(), p.map_size(), p.mm_per_px, {.seed = 7});
+  const auto& sequence = p.sequences[1];
+  tacmap::arm_pose arm{.x_mm = 250.0, .y_mm = -40.0, .theta_rad = 0.3};
+  tacmap::tactile_frame frame;
+  for (std::size_t t = 0; t < sequence.size(); ++t) {
+    frame = sim.render(p.locations[sequence[t].location].pose());
+    if (t > 0) {
+      arm.x_mm += sequence[t].measured_motion.dx_mm;
+      arm.y_mm += sequence[t].measured_motion.dy_mm;
+    }
+    const auto a =
+        t == 0 ? by_motion.touch(frame) : by_motion.touch(frame, sequence[t].measured_motion);
+    // A small yaw jitter (under the 5 degrees a known heading allows) changes nothing.
+    const auto b = by_pose.touch_at(
+        frame, {.x_mm = arm.x_mm, .y_mm = arm.y_mm, .theta_rad = arm.theta_rad + 0.01 * (t % 2)});
+    CHECK(b.object == a.object);
+    CHECK((b.position_mm - a.position_mm).norm() < 1e-9);
+    REQUIRE(b.object_probability.size() == a.object_probability.size());
+    for (std::size_t k = 0; k < a.object_probability.size(); ++k)
+      CHECK(b.object_probability[k] == doctest::Approx(a.object_probability[k]).epsilon(1e-12));
+  }
+  // A turned arm, a NaN and an overflowing motion are refused, naming the value; the pose is
+  // not kept, so the next touch's motion is counted from the last accepted pose.
+  const std::size_t touches = by_pose.touches();
+  CHECK_THROWS_WITH_AS(
+      by_pose.touch_at(frame, {.x_mm = arm.x_mm, .y_mm = arm.y_mm, .theta_rad = 0.9}),
+      doctest::Contains("yaw changed by"), std::invalid_argument);
+  CHECK_THROWS_WITH_AS(by_pose.touch_at(frame, {.x_mm = std::nan(""), .y_mm = 0.0}),
+                       doctest::Contains("not finite"), std::invalid_argument);
+  CHECK_THROWS_WITH_AS(
+      by_pose.touch_at(frame, {.x_mm = -std::numeric_limits<double>::max(), .y_mm = 0.0}),
+      doctest::Contains("overflows a double"), std::invalid_argument);
+  CHECK(by_pose.touches() == touches);
+  const auto a = by_motion.touch(frame, tacmap::odometry{.dx_mm = 1.0, .dy_mm = 0.0});
+  const auto b =
+      by_pose.touch_at(frame, {.x_mm = arm.x_mm + 1.0, .y_mm = arm.y_mm, .theta_rad = 0.3});
+  CHECK((b.position_mm - a.position_mm).norm() < 1e-9);
+  // reset() forgets the pose: the next touch_at has no motion, as a first touch.
+  by_pose.reset();
+  by_motion.reset();
+  CHECK((by_pose.touch_at(frame, {.x_mm = 0.0, .y_mm = 0.0}).position_mm -
+         by_motion.touch(frame).position_mm)
+            .norm() < 1e-9);
+}
+
 TEST_CASE("library_localizer: a move off every map restarts the paper's configuration") {
   // No motion floor: a 1 m move carries every state off every map, which the filter reports as
   // a std::domain_error; the localizer starts again from each object's prior instead.
