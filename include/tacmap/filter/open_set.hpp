@@ -112,9 +112,9 @@ struct open_set_params {
   /// (`library_localizer`); a single-map `localizer` weighs `support` in either case.
   unknown_model model = unknown_model::support;
   /// b in eq. 2, in (0, 1]: the weight on each touch's evidence against the shadow's; fitted.
-  double shadow_weight = 0.296;
+  double shadow_weight = 0.519;
   /// c in eq. 2, in [0, 1]: the weight on each touch's support beside it; fitted.
-  double shadow_support_weight = 0.519;
+  double shadow_support_weight = 0.296;
   /// m in eq. 2, in [-20, 20] nats: what each touch must earn before it counts for the maps;
   /// fitted.
   double shadow_margin = 0.587;
@@ -138,13 +138,13 @@ struct open_set_params {
     if (!(std::isfinite(shadow_weight) && shadow_weight > 0.0 && shadow_weight <= 1.0))
       detail::fail("open_set_params: shadow_weight = ", shadow_weight,
                    "; expected a weight in (0, 1] on each touch's evidence against the shadow "
-                   "filter's (1: the Bayes factor itself; the fitted default is 0.296)");
+                   "filter's (1: the Bayes factor itself; the fitted default is 0.519)");
     if (!(std::isfinite(shadow_support_weight) && shadow_support_weight >= 0.0 &&
           shadow_support_weight <= 1.0))
       detail::fail("open_set_params: shadow_support_weight = ", shadow_support_weight,
                    "; expected a weight in [0, 1] on each touch's prediction support beside its "
                    "evidence against the shadow filter's (0: the evidence alone; the fitted "
-                   "default is 0.519)");
+                   "default is 0.296)");
     if (!(std::isfinite(shadow_margin) && shadow_margin >= -20.0 && shadow_margin <= 20.0))
       detail::fail("open_set_params: shadow_margin = ", shadow_margin,
                    "; expected nats in [-20, 20] each touch must earn before it counts for the "
