@@ -237,35 +237,6 @@ template <localizer_measurement M>
                              executor);
 }
 
-namespace detail {
-/// The open set's shadow filter through one touch of the filter it shadows (filter/open_set.hpp,
-/// eq. 2): the same motion (none on a first touch), the same frame (none when it was rejected),
-/// and a restart from uniform when the filter restarted. A motion or a touch that rules out
-/// every state the shadow allowed restarts the shadow alone (an unknown surface's chance fits
-/// need not follow the odometry): its evidence is then the touch's under a uniform belief.
-/// Returns the shadow's report of the touch (none for a rejected frame).
-template <class Filter, class Measurement>
-std::optional<update_report> shadow_step(Filter& shadow, const std::optional<odometry>& moved,
-                                         const Measurement* z, bool restarted) {
-  if (restarted) {
-    shadow.reset();
-  } else if (moved) {
-    try {
-      shadow.predict(*moved);
-    } catch (const std::domain_error&) {
-      shadow.reset();
-    }
-  }
-  if (z == nullptr) return std::nullopt;
-  try {
-    return shadow.update(*z);
-  } catch (const contradiction_error&) {
-    shadow.reset();
-    return shadow.update(*z);
-  }
-}
-}  // namespace detail
-
 /// What one touch on a library gave.
 struct library_touch_result {
   /// localized: the most probable object and `position_mm` on its map are right with the

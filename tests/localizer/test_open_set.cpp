@@ -309,29 +309,69 @@ TEST_CASE(
   }
 }
 
+TEST_CASE(
+    "localizer, shadow model: on a mirror-symmetric map the shadow is the filter itself, so P(not "
+    "this object) stays at the prior; a reset restarts the shadow") {
+  // As the library's case above, for one map: the gecko beside its mirror image.
+  const auto& p = tacmap_test::gecko();
+  tacmap::image<float> twice(p.map.rows(), 2 * p.map.cols());
+  twice << p.map, p.map.rowwise().reverse();
+  auto config = fast_config();
+  config.open_set.model = tacmap::unknown_model::shadow;
+  config.open_set.shadow_weight = 1.0;
+  config.open_set.shadow_support_weight = 0.0;
+  config.open_set.shadow_margin = 0.0;
+  tacmap::localizer shadowed(twice, p.mm_per_px, config), plain(twice, p.mm_per_px, fast_config());
+  const auto touch = [](auto& loc) {
+    return [&loc](const auto& frame, const auto& moved) {
+      return moved ? loc.touch(frame, *moved) : loc.touch(frame);
+    };
+  };
+  for (std::size_t q = 0; q < 2; ++q) {
+    CAPTURE(q);
+    shadowed.reset();
+    plain.reset();
+    const auto with_shadow = run_gecko_sequence(q, 80 + q, touch(shadowed));
+    const auto with_support = run_gecko_sequence(q, 80 + q, touch(plain));
+    double moved = 0.0;
+    for (std::size_t t = 0; t < with_shadow.size(); ++t) {
+      CAPTURE(t);
+      REQUIRE(!with_shadow[t].restarted);
+      CHECK(with_shadow[t].probability_other_object == doctest::Approx(0.5).epsilon(1e-4));
+      moved = std::max(moved, std::abs(with_support[t].probability_other_object - 0.5));
+    }
+    CHECK(moved > 0.1);
+  }
+}
+
 TEST_CASE("localizer: P(not this object) rises on touches of another object, falls on its own") {
   const auto& p = tacmap_test::gecko();
-  const auto config = fast_config();
   const auto other = blobs(p.map.rows(), p.map.cols(), 11);
-  for (std::size_t q = 0; q < 3; ++q) {
-    CAPTURE(q);
-    // The gecko's touches on the photograph of another object (the wrong-object case).
-    tacmap::localizer wrong(other, p.mm_per_px, config);
-    const auto on_other = run_gecko_sequence(q, 70 + q, [&](const auto& frame, const auto& moved) {
-      return moved ? wrong.touch(frame, *moved) : wrong.touch(frame);
-    });
-    tacmap::localizer right(p.map, p.mm_per_px, config);
-    const auto on_own = run_gecko_sequence(q, 70 + q, [&](const auto& frame, const auto& moved) {
-      return moved ? right.touch(frame, *moved) : right.touch(frame);
-    });
-    for (const auto& r : on_other) CHECK(r.verdict != tacmap::verdict::localized);
-    CHECK(on_other.back().probability_other_object > 0.9);
-    CHECK(on_own.back().probability_other_object < 0.01);
-    CHECK(on_own.back().verdict == tacmap::verdict::localized);
-    for (const auto& r : on_own)
-      if (r.probability_other_object > 1.0 - config.confidence.threshold)
-        CHECK(r.verdict != tacmap::verdict::localized);
-  }
+  // The support model (the default) and the shadow model with its fitted weights.
+  auto shadow = fast_config();
+  shadow.open_set.model = tacmap::unknown_model::shadow;
+  for (const auto& config : {fast_config(), shadow})
+    for (std::size_t q = 0; q < 3; ++q) {
+      CAPTURE(q);
+      CAPTURE(static_cast<int>(config.open_set.model));
+      // The gecko's touches on the photograph of another object (the wrong-object case).
+      tacmap::localizer wrong(other, p.mm_per_px, config);
+      const auto on_other =
+          run_gecko_sequence(q, 70 + q, [&](const auto& frame, const auto& moved) {
+            return moved ? wrong.touch(frame, *moved) : wrong.touch(frame);
+          });
+      tacmap::localizer right(p.map, p.mm_per_px, config);
+      const auto on_own = run_gecko_sequence(q, 70 + q, [&](const auto& frame, const auto& moved) {
+        return moved ? right.touch(frame, *moved) : right.touch(frame);
+      });
+      for (const auto& r : on_other) CHECK(r.verdict != tacmap::verdict::localized);
+      CHECK(on_other.back().probability_other_object > 0.9);
+      CHECK(on_own.back().probability_other_object < 0.01);
+      CHECK(on_own.back().verdict == tacmap::verdict::localized);
+      for (const auto& r : on_own)
+        if (r.probability_other_object > 1.0 - config.confidence.threshold)
+          CHECK(r.verdict != tacmap::verdict::localized);
+    }
 }
 
 TEST_CASE(

@@ -62,8 +62,9 @@
 // with b = 1, c = 0, m = 0 the Bayes factor of the library against "a surface like these,
 // mirrored" (p(z | U) estimated by the shadow's mixture over the surrogates), and b, c, m fitted
 // as a and d are (scripts/fit_open_set.py --model shadow). The shadow costs a second filter: its
-// maps' preparation, memory and every touch's update. `library_localizer` runs it where
-// `open_set_params::model` says so; the single-map `localizer` weighs eq. 1.
+// maps' preparation, memory and every touch's update. Both front doors run it where
+// `open_set_params::model` says so (the single-map `localizer` on its mirrored map, with a known
+// heading; with headings it weighs eq. 1).
 //
 // The prior P(U) is a configured value (`open_set_params::prior_unknown`), what the robot
 // believes before touching: the default 0.5 says "as likely something we never photographed as
@@ -78,6 +79,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 
 #include "tacmap/config.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
@@ -108,8 +110,8 @@ struct open_set_params {
   /// d in eq. 1, in [0, 20] nats: the support a touch needs before it counts for the maps (an
   /// unknown surface's own chance fits). 0: the memoryless model.
   double support_margin = 0.769;
-  /// Which model weighs the touches. `shadow` is used where a shadow filter runs
-  /// (`library_localizer`); a single-map `localizer` weighs `support` in either case.
+  /// Which model weighs the touches: `shadow` runs the shadow filter beside the library's or
+  /// the single map's (known heading; a `localizer` with headings weighs `support`).
   unknown_model model = unknown_model::support;
   /// b in eq. 2, in (0, 1]: the weight on each touch's evidence against the shadow's; fitted.
   double shadow_weight = 0.519;
@@ -226,6 +228,33 @@ inline void follow_touch(open_set& unknown, bool restarted,
     unknown.observe(*report, *shadow);
   else if (report)
     unknown.observe(*report);
+}
+
+/// The open set's shadow filter through one touch of the filter it shadows (eq. 2): the same
+/// motion (none on a first touch), the same frame (none when it was rejected), and a restart
+/// from uniform when the filter restarted. A motion or a touch that rules out every state the
+/// shadow allowed restarts the shadow alone (an unknown surface's chance fits need not follow
+/// the odometry): its evidence is then the touch's under a uniform belief. Returns the shadow's
+/// report of the touch (none for a rejected frame).
+template <class Filter, class Motion, class Measurement>
+std::optional<update_report> shadow_step(Filter& shadow, const std::optional<Motion>& moved,
+                                         const Measurement* z, bool restarted) {
+  if (restarted) {
+    shadow.reset();
+  } else if (moved) {
+    try {
+      shadow.predict(*moved);
+    } catch (const std::domain_error&) {
+      shadow.reset();
+    }
+  }
+  if (z == nullptr) return std::nullopt;
+  try {
+    return shadow.update(*z);
+  } catch (const contradiction_error&) {
+    shadow.reset();
+    return shadow.update(*z);
+  }
 }
 }  // namespace detail
 
