@@ -690,7 +690,8 @@ int main(int argc, char** argv) try {
                  "mirrored maps, eq. 2)")
       ->capture_default_str();
   app.add_option("--unknown-shadow-weight", unknown_model.shadow_weight,
-                 "open set, shadow model: the weight a on each touch's evidence, in (0, 1]")
+                 "open set, shadow model: the weight b on each touch's evidence against the "
+                 "shadow's, in (0, 1]")
       ->capture_default_str();
   app.add_option("--unknown-shadow-support-weight", unknown_model.shadow_support_weight,
                  "open set, shadow model: the weight c on each touch's support, in [0, 1]")
