@@ -292,7 +292,43 @@ void bind_config(py::module_& m) {
           [](localizer_config& c, double d) { c.open_set.support_margin = d; },
           "d in [0, 20] nats of the unknown surface's model (C++ "
           "open_set_params::support_margin): the support a touch needs before it counts for "
-          "the map. Fitted: 0.769.");
+          "the map. Fitted: 0.769.")
+      .def_property(
+          "unknown_model",
+          [](const localizer_config& c) {
+            return std::string(c.open_set.model == unknown_model::shadow ? "shadow" : "support");
+          },
+          [](localizer_config& c, const std::string& name) {
+            if (name == "support")
+              c.open_set.model = unknown_model::support;
+            else if (name == "shadow")
+              c.open_set.model = unknown_model::shadow;
+            else
+              tacmap::detail::fail("LocalizerConfig.unknown_model = '", name,
+                                   "'; expected 'support' (each touch's support, the default) or "
+                                   "'shadow' (a second filter over the mirrored map(s))");
+          },
+          "How a touch on an unknown surface is modelled (C++ open_set_params::model): "
+          "'support' (-a (S - d) a touch, the default) or 'shadow' (a second filter over the "
+          "mirrored map(s) follows the same touches; each moves the log odds by -(b (L - L') + "
+          "c S - m), L and L' the two filters' evidence; twice the cost).")
+      .def_property(
+          "unknown_shadow_weight",
+          [](const localizer_config& c) { return c.open_set.shadow_weight; },
+          [](localizer_config& c, double b) { c.open_set.shadow_weight = b; },
+          "b in (0, 1] of the shadow model (C++ open_set_params::shadow_weight). Fitted: 0.519.")
+      .def_property(
+          "unknown_shadow_support_weight",
+          [](const localizer_config& c) { return c.open_set.shadow_support_weight; },
+          [](localizer_config& c, double w) { c.open_set.shadow_support_weight = w; },
+          "c in [0, 1] of the shadow model (C++ open_set_params::shadow_support_weight). "
+          "Fitted: 0.296.")
+      .def_property(
+          "unknown_shadow_margin",
+          [](const localizer_config& c) { return c.open_set.shadow_margin; },
+          [](localizer_config& c, double margin) { c.open_set.shadow_margin = margin; },
+          "m in [-20, 20] nats of the shadow model (C++ open_set_params::shadow_margin). "
+          "Fitted: 0.587.");
   enum_property(cfg, "appearance", &localizer_config::appearance, appearance_names_,
                 "How the map's brightness relates to the object's height: 'fixed' (raised "
                 "parts look bright, as the paper's gecko), 'latent' (both relations are "

@@ -402,6 +402,7 @@ int main(int argc, char** argv) try {
   std::string library_mode_name = "closed";
   double prior_unknown = tacmap::open_set_params{}.prior_unknown;
   tacmap::open_set_params unknown_model;  // its prior_unknown is --prior-unknown's
+  std::string unknown_model_name = "support";
   // Overrides of the scenario's knobs: empty = the scenario's value.
   struct knob {
     const char* flag;
@@ -683,6 +684,21 @@ int main(int argc, char** argv) try {
                  "open set: the margin d, in nats, a touch's prediction support needs before it "
                  "counts for the maps, in [0, 20] (0: memoryless)")
       ->capture_default_str();
+  app.add_option("--unknown-model", unknown_model_name,
+                 "open set: support (each touch's prediction support, eq. 1 of "
+                 "filter/open_set.hpp) or shadow (its evidence against a shadow filter over the "
+                 "mirrored maps, eq. 2)")
+      ->capture_default_str();
+  app.add_option("--unknown-shadow-weight", unknown_model.shadow_weight,
+                 "open set, shadow model: the weight b on each touch's evidence against the "
+                 "shadow's, in (0, 1]")
+      ->capture_default_str();
+  app.add_option("--unknown-shadow-support-weight", unknown_model.shadow_support_weight,
+                 "open set, shadow model: the weight c on each touch's support, in [0, 1]")
+      ->capture_default_str();
+  app.add_option("--unknown-shadow-margin", unknown_model.shadow_margin,
+                 "open set, shadow model: the margin m in nats per touch, in [-20, 20]")
+      ->capture_default_str();
   app.add_flag("--quiet,-q", quiet, "no progress bar (it is drawn only when stderr is a terminal)");
   app.add_option("--scenario", scenario_name,
                  "ideal (the map's own image, a new sensor), realistic (camera map, "
@@ -809,6 +825,25 @@ int main(int argc, char** argv) try {
     tacmap::open_set_params{.support_margin = unknown_model.support_margin}.validate();
   } catch (const std::invalid_argument& e) {
     throw CLI::ValidationError("--unknown-support-margin", e.what());
+  }
+  unknown_model.model = parse_choice<tacmap::unknown_model>(
+      "--unknown-model", unknown_model_name,
+      {{"support", tacmap::unknown_model::support}, {"shadow", tacmap::unknown_model::shadow}});
+  try {
+    tacmap::open_set_params{.shadow_weight = unknown_model.shadow_weight}.validate();
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--unknown-shadow-weight", e.what());
+  }
+  try {
+    tacmap::open_set_params{.shadow_support_weight = unknown_model.shadow_support_weight}
+        .validate();
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--unknown-shadow-support-weight", e.what());
+  }
+  try {
+    tacmap::open_set_params{.shadow_margin = unknown_model.shadow_margin}.validate();
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--unknown-shadow-margin", e.what());
   }
   const auto mode = parse_choice<tacmap_tools::library_mode>(
       "--library-mode", library_mode_name,

@@ -127,7 +127,7 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
   csv << "config,mode,object,sequence,touch,decided,p_true_object,p_decided,error_mm,"
          "known_error_mm,probability_within,verdict,objects_evaluated,raised_dark,p_unknown,"
          "log_open_set_factor,open_set_verdict,log_likelihood_max,log_marginal_likelihood,"
-         "log_prediction_support,entropy_nats\n";
+         "log_prediction_support,entropy_nats,log_shadow_evidence,shadow_log_likelihood_max\n";
   bool below_floor = false;
   const std::size_t k_objects = objects.size();
   std::printf(
@@ -166,8 +166,8 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
         char line[800];
         std::snprintf(
             line, sizeof line,
-            "%s,%s,%s,%zu,%zu,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%s,%zu,%d,%.6g,%.6g,%s,%.6g,%.6g,%.6g,"
-            "%.6g\n",
+            "%s,%s,%s,%zu,%zu,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%s,%zu,%d,%.6g,%.6g,%s,%.9g,%.9g,%.6g,"
+            "%.6g,%.9g,%.9g\n",
             library_label(config).c_str(), to_string(mode), objects[object].name.c_str(), index,
             t + 1, objects[r.decided[t]].name.c_str(), r.object_probability[t][object],
             r.object_probability[t][r.decided[t]], r.touches[t].error_mm,
@@ -176,7 +176,9 @@ inline bool run_library_evaluation(const std::vector<tacmap::library_object>& ob
             r.probability_unknown[t], r.log_open_set_factor[t],
             tacmap::to_string(r.open_set_verdict[t]), r.log_likelihood_max[t],
             r.touches[t].log_marginal_likelihood, r.touches[t].log_prediction_support,
-            r.touches[t].entropy_nats);
+            r.touches[t].entropy_nats,
+            r.log_shadow_evidence.empty() ? 0.0 : r.log_shadow_evidence[t],
+            r.shadow_log_likelihood_max.empty() ? 0.0 : r.shadow_log_likelihood_max[t]);
         csv << line;
       }
       if (!quiet) std::fprintf(stderr, "\r%zu/%zu sequences", q + 1, sequences);

@@ -217,6 +217,19 @@ template <localizer_measurement M>
       library_likelihood<appearance_likelihood<typename M::planar_model>>(std::move(models)));
 }
 
+/// The surrogate maps of the open set's shadow filter (filter/open_set.hpp, eq. 2): each map
+/// mirrored left to right, named "mirrored <name>". A mirrored photograph has the texture, the
+/// contrast and the scale of its object, so its chance fits to a touch are those of a surface
+/// like the library's, but it is no surface the touches come from (unless the object itself
+/// is mirror-symmetric, whose touches then fit the shadow as well as the map).
+[[nodiscard]] inline std::vector<library_map> mirrored_maps(const std::vector<library_map>& maps) {
+  std::vector<library_map> out;
+  out.reserve(maps.size());
+  for (const library_map& m : maps)
+    out.push_back({"mirrored " + m.name, m.map.rowwise().reverse().eval(), m.mm_per_px});
+  return out;
+}
+
 /// The shipped models' library filter (`configured_models`): what `library_localizer` runs.
 [[nodiscard]] inline library_localizer_filter make_library_filter(
     const localizer_config& config, const std::vector<library_map>& maps,
@@ -286,9 +299,14 @@ class basic_library_localizer {
       : config_(std::move(config)),
         sensor_(sensor),
         measurement_(std::move(measurement)),
-        filter_(make_library_filter(measurement_, config_, maps, sensor_, std::move(prior),
-                                    mm_per_px, executor)),
+        filter_(
+            make_library_filter(measurement_, config_, maps, sensor_, prior, mm_per_px, executor)),
         warnings_(detail::library_warnings(maps, config_, sensor_)) {
+    // The open set's shadow (filter/open_set.hpp, eq. 2): the mirrored maps, at the library's
+    // scale and with its prior, weighed by the same motions and touches.
+    if (config_.open_set.model == unknown_model::shadow)
+      shadow_.emplace(make_library_filter(measurement_, config_, mirrored_maps(maps), sensor_,
+                                          std::move(prior), mm_per_px, executor));
     config_.preprocessing.mm_per_px = library_scale(maps, config_, sensor_, mm_per_px);
   }
 
@@ -353,6 +371,7 @@ class basic_library_localizer {
   /// `touch_at` pose.
   void reset() {
     filter_.reset();
+    if (shadow_) shadow_->reset();
     calls_ = 0;
     touches_ = 0;
     restarts_ = 0;
@@ -383,6 +402,9 @@ class basic_library_localizer {
   }
 
   [[nodiscard]] const filter_type& filter() const { return filter_; }
+  /// The open set's shadow filter over the mirrored maps (`unknown_model::shadow`; see
+  /// filter/open_set.hpp, eq. 2), or nullptr with the support model.
+  [[nodiscard]] const filter_type* shadow_filter() const { return shadow_ ? &*shadow_ : nullptr; }
   /// The configuration, with `preprocessing.mm_per_px` set to the library's scale.
   [[nodiscard]] const localizer_config& config() const { return config_; }
   [[nodiscard]] const Measurement& measurement() const { return measurement_; }
@@ -420,7 +442,9 @@ class basic_library_localizer {
     std::optional<detail::sensor_correction> calibration_before;
     if (correction_.estimate()) calibration_before = correction_;
     std::optional<detail::step_outcome<filter_type>> stepped;
+    std::optional<update_report> shadow_report;
     preprocessed_frame pre;
+    const std::size_t touches_before = touches_, restarts_before = restarts_;
     try {
       pre = preprocess(correction_.apply(frame), config_.preprocessing);
       if constexpr (requires { measurement_.check_touch(config_, pre.pixels); })
@@ -432,6 +456,21 @@ class basic_library_localizer {
             if (calls_ > 0 && moved) filter_.predict(*moved);
           },
           pre.accepted() ? &view : nullptr, config_.confidence, touches_, restarts_, saved_));
+      if (shadow_) {
+        // The shadow follows the filter's touch; should it fail (a model's error, not a
+        // contradiction), the filter's touch is taken back too.
+        shadow_->save_state(shadow_saved_);
+        try {
+          shadow_report = detail::shadow_step(*shadow_, calls_ > 0 ? moved : std::nullopt,
+                                              pre.accepted() ? &view : nullptr, stepped->restarted);
+        } catch (...) {
+          shadow_->restore_state(shadow_saved_);
+          filter_.restore_state(saved_);
+          touches_ = touches_before;
+          restarts_ = restarts_before;
+          throw;
+        }
+      }
     } catch (...) {
       if (calibration_before) correction_ = std::move(*calibration_before);
       throw;
@@ -443,7 +482,7 @@ class basic_library_localizer {
     r.rejection = pre.rejection;
     // The open set weighs the touch over the states evaluated (the objects not pruned).
     const auto& grid = filter_.grid();
-    detail::follow_touch(unknown_, out.restarted, out.report);
+    detail::follow_touch(unknown_, out.restarted, out.report, shadow_report);
     r.probability_unknown = unknown_.probability_unknown();
     const confidence conf =
         with_open_set(out.assessment, r.probability_unknown, config_.confidence);
@@ -468,6 +507,8 @@ class basic_library_localizer {
   filter_type filter_;
   std::vector<std::string> warnings_;
   typename filter_type::saved_state saved_;  // localizer_step's (one belief's storage)
+  std::optional<filter_type> shadow_;        // the open set's shadow (unknown_model::shadow)
+  typename filter_type::saved_state shadow_saved_;
   std::size_t calls_ = 0;
   std::size_t touches_ = 0;
   std::size_t restarts_ = 0;

@@ -1427,6 +1427,10 @@ class basic_localizer {
     config_.preprocessing.mm_per_px = mm_per_px_;
     if (config_.headings == 0) {
       planar_.emplace(make_planar_filter(measurement_, config_, map_, mm_per_px_, window_));
+      // The open set's shadow (filter/open_set.hpp, eq. 2): the map mirrored left to right.
+      if (config_.open_set.model == unknown_model::shadow)
+        shadow_.emplace(make_planar_filter(measurement_, config_, map_.rowwise().reverse().eval(),
+                                           mm_per_px_, window_));
     } else if constexpr (has_headings) {
       pose_.emplace(make_pose_filter(measurement_, config_, map_, mm_per_px_, window_));
     } else if constexpr (localizes_headings<Measurement>) {
@@ -1530,6 +1534,7 @@ class basic_localizer {
   /// Starts a new exploration on the same map: a uniform belief, no previous pose.
   void reset() {
     with_filter([](auto& f) { f.reset(); });
+    if (shadow_) shadow_->reset();
     calls_ = 0;
     touches_ = 0;
     restarts_ = 0;
@@ -1690,6 +1695,7 @@ class basic_localizer {
   touch_result run(Filter& filter, const preprocessed_frame& pre,
                    const std::optional<sensor_odometry>& moved) {
     constexpr bool pose = Filter::grid_type::dimension == 3;
+    const std::size_t touches_before = touches_, restarts_before = restarts_;
     const auto out = detail::localizer_step(
         filter,
         [&] {
@@ -1705,7 +1711,29 @@ class basic_localizer {
     r.restarted = out.restarted;
     r.rejection = pre.rejection;
     const auto& est = out.estimate;
-    detail::follow_touch(other_object_, out.restarted, out.report);
+    std::optional<update_report> shadow_report;
+    if constexpr (!pose) {
+      if (shadow_) {
+        // The shadow follows the filter's touch (known heading only); should it fail (a
+        // model's error, not a contradiction), the filter's touch is taken back too.
+        shadow_->save_state(shadow_saved_);
+        try {
+          shadow_report = detail::shadow_step(
+              *shadow_,
+              calls_ > 0 && moved
+                  ? std::optional<odometry>(odometry{.dx_mm = moved->du_mm, .dy_mm = moved->dv_mm})
+                  : std::nullopt,
+              pre.accepted() ? &pre.pixels : nullptr, out.restarted);
+        } catch (...) {
+          shadow_->restore_state(shadow_saved_);
+          filter.restore_state(saved_state_for<Filter>());
+          touches_ = touches_before;
+          restarts_ = restarts_before;
+          throw;
+        }
+      }
+    }
+    detail::follow_touch(other_object_, out.restarted, out.report, shadow_report);
     r.probability_other_object = other_object_.probability_unknown();
     const confidence& conf = out.assessment;
     r.verdict = pre.accepted()
@@ -1759,6 +1787,8 @@ class basic_localizer {
   std::optional<planar_filter_type> planar_;
   std::optional<pose_filter_type> pose_;
   typename planar_filter_type::saved_state planar_saved_;
+  std::optional<planar_filter_type> shadow_;  // the open set's shadow (unknown_model::shadow)
+  typename planar_filter_type::saved_state shadow_saved_;
   typename pose_filter_type::saved_state pose_saved_;
   std::size_t calls_ = 0;
   std::size_t touches_ = 0;

@@ -121,6 +121,48 @@ TEST_CASE("open_set: the prior, the touches' factors and the logistic") {
   CHECK(u.probability_unknown() == doctest::Approx(0.2));
 }
 
+TEST_CASE(
+    "open_set, shadow model: b (L - L') + c S - m from the filter's and the shadow's reports") {
+  tacmap::open_set u({.model = tacmap::unknown_model::shadow,
+                      .shadow_weight = 0.7,
+                      .shadow_support_weight = 0.2,
+                      .shadow_margin = 0.5});
+  tacmap::update_report report, shadow;
+  report.log_likelihood_max = -10.0;
+  report.log_evidence = -2.0;  // L = -12
+  report.log_prediction_support = 1.5;
+  shadow.log_likelihood_max = -11.0;
+  shadow.log_evidence = -4.0;           // L' = -15
+  shadow.log_prediction_support = 9.0;  // the shadow's own support plays no part
+  CHECK(u.log_factor(report, shadow) == doctest::Approx(0.7 * 3.0 + 0.2 * 1.5 - 0.5));
+  // The likelihood's level cancels: both filters' evidences shift alike.
+  report.log_likelihood_max -= 20.0;
+  shadow.log_likelihood_max -= 20.0;
+  CHECK(u.log_factor(report, shadow) == doctest::Approx(0.7 * 3.0 + 0.2 * 1.5 - 0.5));
+  // follow_touch weighs eq. 2 where the shadow reported the touch, eq. 1 where it did not.
+  tacmap::detail::follow_touch(u, false, report, shadow);
+  CHECK(u.log_odds() == doctest::Approx(-(0.7 * 3.0 + 0.2 * 1.5 - 0.5)));
+  u.reset();
+  tacmap::detail::follow_touch(u, false, report);
+  CHECK(u.log_odds() == doctest::Approx(-u.log_factor(report)));
+  tacmap::detail::follow_touch(u, true, report, shadow);
+  CHECK(u.log_odds() == doctest::Approx(0.0));
+  // The shadow model's settings, each named with its range.
+  using tacmap_test::message_of;
+  const std::vector<std::pair<tacmap::open_set_params, std::string>> bad = {
+      {{.shadow_weight = 0.0}, "shadow_weight = 0; expected a weight in (0, 1]"},
+      {{.shadow_support_weight = -0.5},
+       "shadow_support_weight = -0.5; expected a weight in [0, 1]"},
+      {{.shadow_margin = 21.0}, "shadow_margin = 21; expected nats in [-20, 20]"},
+      {{.shadow_margin = std::numeric_limits<double>::infinity()}, "shadow_margin = inf"},
+      {{.model = static_cast<tacmap::unknown_model>(7)}, "model = 7; expected"},
+  };
+  for (const auto& [params, expected] : bad) {
+    CAPTURE(expected);
+    CHECK(message_of([&] { tacmap::open_set v(params); }).find(expected) != std::string::npos);
+  }
+}
+
 TEST_CASE("open_set: a bad prior or factor is refused, naming the value") {
   using tacmap_test::message_of;
   for (const double bad : {0.0, 1.0, -0.1, 1.5, std::numeric_limits<double>::quiet_NaN(),
@@ -175,67 +217,161 @@ TEST_CASE("with_open_set: localized only when the map and the position beat the 
 TEST_CASE(
     "library_localizer: P(unknown) rises on an object not in the library, falls on one in it") {
   const auto& p = tacmap_test::gecko();
-  const auto config = fast_config();
-  for (std::size_t q = 0; q < 3; ++q) {
-    CAPTURE(q);
-    // The gecko is not in the library: every "localized" would be false.
-    tacmap::library_localizer without(library_without_gecko(), config);
-    const auto unknown = run_gecko_sequence(q, 40 + q, [&](const auto& frame, const auto& moved) {
-      return moved ? without.touch(frame, *moved) : without.touch(frame);
-    });
-    // With the gecko in the library.
-    auto maps = library_without_gecko();
-    maps.push_back({"gecko", p.map, p.mm_per_px});
-    tacmap::library_localizer with(maps, config);
-    const auto known = run_gecko_sequence(q, 40 + q, [&](const auto& frame, const auto& moved) {
-      return moved ? with.touch(frame, *moved) : with.touch(frame);
-    });
-    for (const auto* run : {&unknown, &known}) {
-      for (const auto& r : *run) {
-        double sum = r.probability_unknown;
-        for (const double k : r.object_probability) sum += k;
-        CHECK(sum == doctest::Approx(1.0).epsilon(1e-5));
-        CHECK(r.probability_within <= 1.0 - r.probability_unknown + 1e-9);
-        // Never "localized" while P(unknown) leaves the threshold out of reach.
-        if (r.probability_unknown > 1.0 - config.confidence.threshold)
-          CHECK(r.verdict != tacmap::verdict::localized);
+  // The support model (the default) and the shadow model with its fitted weights.
+  auto shadow = fast_config();
+  shadow.open_set.model = tacmap::unknown_model::shadow;
+  for (const auto& config : {fast_config(), shadow})
+    for (std::size_t q = 0; q < 3; ++q) {
+      CAPTURE(q);
+      CAPTURE(static_cast<int>(config.open_set.model));
+      // The gecko is not in the library: every "localized" would be false.
+      tacmap::library_localizer without(library_without_gecko(), config);
+      const auto unknown = run_gecko_sequence(q, 40 + q, [&](const auto& frame, const auto& moved) {
+        return moved ? without.touch(frame, *moved) : without.touch(frame);
+      });
+      // With the gecko in the library.
+      auto maps = library_without_gecko();
+      maps.push_back({"gecko", p.map, p.mm_per_px});
+      tacmap::library_localizer with(maps, config);
+      const auto known = run_gecko_sequence(q, 40 + q, [&](const auto& frame, const auto& moved) {
+        return moved ? with.touch(frame, *moved) : with.touch(frame);
+      });
+      for (const auto* run : {&unknown, &known}) {
+        for (const auto& r : *run) {
+          double sum = r.probability_unknown;
+          for (const double k : r.object_probability) sum += k;
+          CHECK(sum == doctest::Approx(1.0).epsilon(1e-5));
+          CHECK(r.probability_within <= 1.0 - r.probability_unknown + 1e-9);
+          // Never "localized" while P(unknown) leaves the threshold out of reach.
+          if (r.probability_unknown > 1.0 - config.confidence.threshold)
+            CHECK(r.verdict != tacmap::verdict::localized);
+        }
       }
+      for (const auto& r : unknown) CHECK(r.verdict != tacmap::verdict::localized);
+      CHECK(unknown.back().probability_unknown > 0.9);
+      CHECK(without.probability_unknown() == unknown.back().probability_unknown);
+      CHECK(known.back().probability_unknown < 0.01);
+      CHECK(known.back().object_name == "gecko");
+      CHECK(known.back().verdict == tacmap::verdict::localized);
+      // reset() goes back to the prior.
+      with.reset();
+      CHECK(with.probability_unknown() == doctest::Approx(0.5));
     }
-    for (const auto& r : unknown) CHECK(r.verdict != tacmap::verdict::localized);
-    CHECK(unknown.back().probability_unknown > 0.9);
-    CHECK(without.probability_unknown() == unknown.back().probability_unknown);
-    CHECK(known.back().probability_unknown < 0.01);
-    CHECK(known.back().object_name == "gecko");
-    CHECK(known.back().verdict == tacmap::verdict::localized);
-    // reset() goes back to the prior.
-    with.reset();
-    CHECK(with.probability_unknown() == doctest::Approx(0.5));
+}
+
+TEST_CASE(
+    "library_localizer, shadow model: on mirror-symmetric maps the shadow is the filter itself, "
+    "so P(unknown) stays at the prior; a reset restarts the shadow") {
+  // Each map is an image beside its own mirror image: mirrored, it is the same map, so a shadow
+  // filter that follows the filter's motions and touches gives every touch the filter's own
+  // evidence, L' = L (up to the order of float sums), and with b = 1, c = 0, m = 0 P(unknown)
+  // does not move. A shadow that skipped a motion, a reset or a touch, or was built at another
+  // scale, would not agree. The support model on the same touches does move it.
+  const auto& p = tacmap_test::gecko();
+  const auto symmetric = [](const tacmap::image<float>& m) {
+    tacmap::image<float> out(m.rows(), 2 * m.cols());
+    out << m, m.rowwise().reverse();
+    return out;
+  };
+  const std::vector<tacmap::library_map> maps = {
+      {"gecko twice", symmetric(p.map), p.mm_per_px},
+      {"blobs twice", symmetric(blobs(p.map.rows(), p.map.cols(), 11)), p.mm_per_px}};
+  auto config = fast_config();
+  config.open_set.model = tacmap::unknown_model::shadow;
+  config.open_set.shadow_weight = 1.0;
+  config.open_set.shadow_support_weight = 0.0;
+  config.open_set.shadow_margin = 0.0;
+  tacmap::library_localizer shadowed(maps, config);
+  REQUIRE(shadowed.shadow_filter() != nullptr);
+  CHECK(shadowed.shadow_filter()->grid().object_name(0) == "mirrored gecko twice");
+  tacmap::library_localizer plain(maps, fast_config());
+  CHECK(plain.shadow_filter() == nullptr);
+  const auto touch = [](auto& loc) {
+    return [&loc](const auto& frame, const auto& moved) {
+      return moved ? loc.touch(frame, *moved) : loc.touch(frame);
+    };
+  };
+  for (std::size_t q = 0; q < 2; ++q) {
+    CAPTURE(q);
+    shadowed.reset();
+    plain.reset();
+    const auto with_shadow = run_gecko_sequence(q, 60 + q, touch(shadowed));
+    const auto with_support = run_gecko_sequence(q, 60 + q, touch(plain));
+    double moved = 0.0;
+    for (std::size_t t = 0; t < with_shadow.size(); ++t) {
+      CAPTURE(t);
+      REQUIRE(!with_shadow[t].restarted);
+      CHECK(with_shadow[t].probability_unknown == doctest::Approx(0.5).epsilon(1e-4));
+      moved = std::max(moved, std::abs(with_support[t].probability_unknown - 0.5));
+    }
+    CHECK(moved > 0.1);
+    CHECK(with_shadow.back().object_name == "gecko twice");
+  }
+}
+
+TEST_CASE(
+    "localizer, shadow model: on a mirror-symmetric map the shadow is the filter itself, so P(not "
+    "this object) stays at the prior; a reset restarts the shadow") {
+  // As the library's case above, for one map: the gecko beside its mirror image.
+  const auto& p = tacmap_test::gecko();
+  tacmap::image<float> twice(p.map.rows(), 2 * p.map.cols());
+  twice << p.map, p.map.rowwise().reverse();
+  auto config = fast_config();
+  config.open_set.model = tacmap::unknown_model::shadow;
+  config.open_set.shadow_weight = 1.0;
+  config.open_set.shadow_support_weight = 0.0;
+  config.open_set.shadow_margin = 0.0;
+  tacmap::localizer shadowed(twice, p.mm_per_px, config), plain(twice, p.mm_per_px, fast_config());
+  const auto touch = [](auto& loc) {
+    return [&loc](const auto& frame, const auto& moved) {
+      return moved ? loc.touch(frame, *moved) : loc.touch(frame);
+    };
+  };
+  for (std::size_t q = 0; q < 2; ++q) {
+    CAPTURE(q);
+    shadowed.reset();
+    plain.reset();
+    const auto with_shadow = run_gecko_sequence(q, 80 + q, touch(shadowed));
+    const auto with_support = run_gecko_sequence(q, 80 + q, touch(plain));
+    double moved = 0.0;
+    for (std::size_t t = 0; t < with_shadow.size(); ++t) {
+      CAPTURE(t);
+      REQUIRE(!with_shadow[t].restarted);
+      CHECK(with_shadow[t].probability_other_object == doctest::Approx(0.5).epsilon(1e-4));
+      moved = std::max(moved, std::abs(with_support[t].probability_other_object - 0.5));
+    }
+    CHECK(moved > 0.1);
   }
 }
 
 TEST_CASE("localizer: P(not this object) rises on touches of another object, falls on its own") {
   const auto& p = tacmap_test::gecko();
-  const auto config = fast_config();
   const auto other = blobs(p.map.rows(), p.map.cols(), 11);
-  for (std::size_t q = 0; q < 3; ++q) {
-    CAPTURE(q);
-    // The gecko's touches on the photograph of another object (the wrong-object case).
-    tacmap::localizer wrong(other, p.mm_per_px, config);
-    const auto on_other = run_gecko_sequence(q, 70 + q, [&](const auto& frame, const auto& moved) {
-      return moved ? wrong.touch(frame, *moved) : wrong.touch(frame);
-    });
-    tacmap::localizer right(p.map, p.mm_per_px, config);
-    const auto on_own = run_gecko_sequence(q, 70 + q, [&](const auto& frame, const auto& moved) {
-      return moved ? right.touch(frame, *moved) : right.touch(frame);
-    });
-    for (const auto& r : on_other) CHECK(r.verdict != tacmap::verdict::localized);
-    CHECK(on_other.back().probability_other_object > 0.9);
-    CHECK(on_own.back().probability_other_object < 0.01);
-    CHECK(on_own.back().verdict == tacmap::verdict::localized);
-    for (const auto& r : on_own)
-      if (r.probability_other_object > 1.0 - config.confidence.threshold)
-        CHECK(r.verdict != tacmap::verdict::localized);
-  }
+  // The support model (the default) and the shadow model with its fitted weights.
+  auto shadow = fast_config();
+  shadow.open_set.model = tacmap::unknown_model::shadow;
+  for (const auto& config : {fast_config(), shadow})
+    for (std::size_t q = 0; q < 3; ++q) {
+      CAPTURE(q);
+      CAPTURE(static_cast<int>(config.open_set.model));
+      // The gecko's touches on the photograph of another object (the wrong-object case).
+      tacmap::localizer wrong(other, p.mm_per_px, config);
+      const auto on_other =
+          run_gecko_sequence(q, 70 + q, [&](const auto& frame, const auto& moved) {
+            return moved ? wrong.touch(frame, *moved) : wrong.touch(frame);
+          });
+      tacmap::localizer right(p.map, p.mm_per_px, config);
+      const auto on_own = run_gecko_sequence(q, 70 + q, [&](const auto& frame, const auto& moved) {
+        return moved ? right.touch(frame, *moved) : right.touch(frame);
+      });
+      for (const auto& r : on_other) CHECK(r.verdict != tacmap::verdict::localized);
+      CHECK(on_other.back().probability_other_object > 0.9);
+      CHECK(on_own.back().probability_other_object < 0.01);
+      CHECK(on_own.back().verdict == tacmap::verdict::localized);
+      for (const auto& r : on_own)
+        if (r.probability_other_object > 1.0 - config.confidence.threshold)
+          CHECK(r.verdict != tacmap::verdict::localized);
+    }
 }
 
 TEST_CASE(

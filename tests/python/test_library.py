@@ -139,6 +139,33 @@ class TestLibraryLocalizer(unittest.TestCase):
         np.testing.assert_allclose(lib.touch(np.zeros((14, 6))).object_probability,
                                    [0.45, 0.05], atol=1e-6)
 
+    def test_the_shadow_model(self):
+        # unknown_model 'shadow': a second filter over the mirrored maps weighs each touch. The
+        # gecko left out of the library: P(none of these) rises, no claim; in it: P falls.
+        p = gecko()
+        config = fast_config(unknown_model="shadow")
+        self.assertEqual(config.unknown_model, "shadow")
+        self.assertEqual(fast_config().unknown_model, "support")
+        self.assertEqual((config.unknown_shadow_weight, config.unknown_shadow_support_weight,
+                          config.unknown_shadow_margin), (0.519, 0.296, 0.587))
+        others = [("blobs a", blobs(p.map.shape, 5), p.mm_per_px),
+                  ("blobs b", blobs(p.map.shape, 6), p.mm_per_px)]
+        results, _ = library_sequence(tacmap.LibraryLocalizer(others, config), simulator(31), 0)
+        for r in results:
+            check_sums(self, r)
+            self.assertNotEqual(r.verdict, "localized")
+        self.assertGreater(results[-1].probability_unknown, 0.9)
+        lib = tacmap.LibraryLocalizer(others + [("gecko", p.map, p.mm_per_px)], config)
+        results, _ = library_sequence(lib, simulator(31), 0)
+        self.assertLess(results[-1].probability_unknown, 0.1)
+        self.assertEqual(results[-1].object_name, "gecko")
+        # A single map's P(not this object) too.
+        loc = tacmap.Localizer(p.map, p.mm_per_px, config)
+        results, _ = library_sequence(loc, simulator(31), 0)
+        self.assertLess(results[-1].probability_other_object, 0.1)
+        with self.assertRaisesRegex(ValueError, "unknown_model = 'mirror'; expected 'support'"):
+            fast_config(unknown_model="mirror")
+
     def test_touch_at_and_bursts_give_the_same_touches(self):
         p = gecko()
         maps = [("gecko", p.map, p.mm_per_px), ("blobs", blobs(p.map.shape, 7), p.mm_per_px)]

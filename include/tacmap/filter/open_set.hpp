@@ -48,6 +48,24 @@
 // flatter than the shipped one's changes the scale of S and deserves its own fit (the script
 // scripts/fit_open_set.py reads tacmap-evaluate's CSVs and prints a and d).
 //
+// A model with memory: the shadow filter (`unknown_model::shadow`). Eq. 1 weighs each touch
+// alone against a population level; what it cannot see is that an unknown surface's chance fits
+// also persist along the arm's motions, so that on a surface we hold no map of a filter over
+// *any* maps of that kind gains predictive evidence by chance as the library's filter does. The
+// shadow model runs a second filter, over surrogate maps (each map mirrored left to right:
+// the same textures, contrasts and scale, but no surface the touches come from), with the same
+// motions and touches and the same restarts, and weighs the library's predictive evidence L_t
+// = log p(z_t | K, z_1..t-1) against the shadow's L'_t:
+//
+//   log p(z_t | K, z_1..t-1) - log p(z_t | U, z_1..t-1) = b (L_t - L'_t) + c S_t - m,      (2)
+//
+// with b = 1, c = 0, m = 0 the Bayes factor of the library against "a surface like these,
+// mirrored" (p(z | U) estimated by the shadow's mixture over the surrogates), and b, c, m fitted
+// as a and d are (scripts/fit_open_set.py --model shadow). The shadow costs a second filter: its
+// maps' preparation, memory and every touch's update. Both front doors run it where
+// `open_set_params::model` says so (the single-map `localizer` on its mirrored map, with a known
+// heading; with headings it weighs eq. 1).
+//
 // The prior P(U) is a configured value (`open_set_params::prior_unknown`), what the robot
 // believes before touching: the default 0.5 says "as likely something we never photographed as
 // one of the photographs" — the most ignorant split between the two, not a value fitted to an
@@ -61,6 +79,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 
 #include "tacmap/config.hpp"
 #include "tacmap/filter/bayes_filter.hpp"
@@ -68,7 +87,17 @@
 
 namespace tacmap {
 
-/// Configuration of the open-set hypothesis (see the file comment, eq. 1).
+/// How a touch on an unknown surface is modelled (see the file comment).
+enum class unknown_model {
+  /// Eq. 1: a (S - d) from the filter's own prediction support S; no extra cost, no memory.
+  support,
+  /// Eq. 2: b (L - L') + c S - m from the touch's predictive evidence L under the maps, L'
+  /// under a shadow filter over surrogate maps (each map mirrored) run along with the same
+  /// motions and touches, and the support S.
+  shadow,
+};
+
+/// Configuration of the open-set hypothesis (see the file comment, eqs. 1 and 2).
 struct open_set_params {
   /// P(U): the prior probability that the touched surface is none of the maps, in (0, 1). 0.5:
   /// as likely unknown as known (the most ignorant split). Smaller trusts the library more: the
@@ -81,6 +110,16 @@ struct open_set_params {
   /// d in eq. 1, in [0, 20] nats: the support a touch needs before it counts for the maps (an
   /// unknown surface's own chance fits). 0: the memoryless model.
   double support_margin = 0.769;
+  /// Which model weighs the touches: `shadow` runs the shadow filter beside the library's or
+  /// the single map's (known heading; a `localizer` with headings weighs `support`).
+  unknown_model model = unknown_model::support;
+  /// b in eq. 2, in (0, 1]: the weight on each touch's evidence against the shadow's; fitted.
+  double shadow_weight = 0.519;
+  /// c in eq. 2, in [0, 1]: the weight on each touch's support beside it; fitted.
+  double shadow_support_weight = 0.296;
+  /// m in eq. 2, in [-20, 20] nats: what each touch must earn before it counts for the maps;
+  /// fitted.
+  double shadow_margin = 0.587;
 
   void validate() const {
     if (!(std::isfinite(prior_unknown) && prior_unknown > 0.0 && prior_unknown < 1.0))
@@ -95,6 +134,23 @@ struct open_set_params {
       detail::fail("open_set_params: support_margin = ", support_margin,
                    "; expected nats in [0, 20] a touch's prediction support needs before it "
                    "counts for the maps (0: the memoryless model; the fitted default is 0.769)");
+    if (model != unknown_model::support && model != unknown_model::shadow)
+      detail::fail("open_set_params: model = ", static_cast<int>(model),
+                   "; expected unknown_model::support or unknown_model::shadow");
+    if (!(std::isfinite(shadow_weight) && shadow_weight > 0.0 && shadow_weight <= 1.0))
+      detail::fail("open_set_params: shadow_weight = ", shadow_weight,
+                   "; expected a weight in (0, 1] on each touch's evidence against the shadow "
+                   "filter's (1: the Bayes factor itself; the fitted default is 0.519)");
+    if (!(std::isfinite(shadow_support_weight) && shadow_support_weight >= 0.0 &&
+          shadow_support_weight <= 1.0))
+      detail::fail("open_set_params: shadow_support_weight = ", shadow_support_weight,
+                   "; expected a weight in [0, 1] on each touch's prediction support beside its "
+                   "evidence against the shadow filter's (0: the evidence alone; the fitted "
+                   "default is 0.296)");
+    if (!(std::isfinite(shadow_margin) && shadow_margin >= -20.0 && shadow_margin <= 20.0))
+      detail::fail("open_set_params: shadow_margin = ", shadow_margin,
+                   "; expected nats in [-20, 20] each touch must earn before it counts for the "
+                   "maps (the fitted default is 0.587)");
   }
 };
 
@@ -117,8 +173,20 @@ class open_set {
     return params_.evidence_weight * (report.log_prediction_support - params_.support_margin);
   }
 
-  /// One touch of the filter, as its update reported it.
+  /// The log Bayes factor of one touch (eq. 2) from the filter's report and the shadow
+  /// filter's report of the same touch.
+  [[nodiscard]] double log_factor(const update_report& report, const update_report& shadow) const {
+    return params_.shadow_weight *
+               (report.log_marginal_likelihood() - shadow.log_marginal_likelihood()) +
+           params_.shadow_support_weight * report.log_prediction_support - params_.shadow_margin;
+  }
+
+  /// One touch of the filter, as its update reported it (eq. 1).
   void observe(const update_report& report) { observe_log_factor(log_factor(report)); }
+  /// One touch of the filter and of its shadow (eq. 2).
+  void observe(const update_report& report, const update_report& shadow) {
+    observe_log_factor(log_factor(report, shadow));
+  }
 
   /// One touch given directly as log p(z | K, past) - log p(z | U) (finite, or -infinity when
   /// the touch ruled out every state the prediction allowed).
@@ -150,13 +218,43 @@ namespace detail {
 /// A front door's touch seen by its open set: a filter that restarted from a uniform belief
 /// restarts the question (back to the prior; the touch that restarted it is not weighed, its
 /// report describes the prediction that failed); otherwise an update (none for a rejected frame)
-/// adds its factor.
+/// adds its factor: eq. 2 against the shadow filter's report where one is given, else eq. 1.
 inline void follow_touch(open_set& unknown, bool restarted,
-                         const std::optional<update_report>& report) {
+                         const std::optional<update_report>& report,
+                         const std::optional<update_report>& shadow = std::nullopt) {
   if (restarted)
     unknown.reset();
+  else if (report && shadow)
+    unknown.observe(*report, *shadow);
   else if (report)
     unknown.observe(*report);
+}
+
+/// The open set's shadow filter through one touch of the filter it shadows (eq. 2): the same
+/// motion (none on a first touch), the same frame (none when it was rejected), and a restart
+/// from uniform when the filter restarted. A motion or a touch that rules out every state the
+/// shadow allowed restarts the shadow alone (an unknown surface's chance fits need not follow
+/// the odometry): its evidence is then the touch's under a uniform belief. Returns the shadow's
+/// report of the touch (none for a rejected frame).
+template <class Filter, class Motion, class Measurement>
+std::optional<update_report> shadow_step(Filter& shadow, const std::optional<Motion>& moved,
+                                         const Measurement* z, bool restarted) {
+  if (restarted) {
+    shadow.reset();
+  } else if (moved) {
+    try {
+      shadow.predict(*moved);
+    } catch (const std::domain_error&) {
+      shadow.reset();
+    }
+  }
+  if (z == nullptr) return std::nullopt;
+  try {
+    return shadow.update(*z);
+  } catch (const contradiction_error&) {
+    shadow.reset();
+    return shadow.update(*z);
+  }
 }
 }  // namespace detail
 

@@ -21,6 +21,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -61,6 +62,13 @@ struct library_sequence_result {
   std::vector<double> probability_unknown;
   std::vector<double> log_open_set_factor;
   std::vector<tacmap::verdict> open_set_verdict;
+  /// After each touch, with the shadow model (`unknown_model::shadow`): the touch's predictive
+  /// log-evidence under the shadow filter over the mirrored maps (eq. 2 of filter/open_set.hpp;
+  /// 0 for a rejected frame); empty with the support model.
+  std::vector<double> log_shadow_evidence;
+  /// The shadow filter's `update_report::log_likelihood_max` of the touch (0 for a rejected
+  /// frame); empty with the support model.
+  std::vector<double> shadow_log_likelihood_max;
   /// After each touch: the touch's largest log-likelihood over the states evaluated
   /// (`update_report::log_likelihood_max`, 0 for a rejected frame).
   std::vector<double> log_likelihood_max;
@@ -133,6 +141,9 @@ class library_experiment {
     // The touches as the library sees them: at its one scale (the coarsest map's, or the
     // working resolution where that is coarser).
     config_.preprocessing.mm_per_px = library_scale(maps, config_, config_.simulator.geometry);
+    if (shadowed())
+      shadow_.emplace(make_library_filter(config_, mirrored_maps(maps), config_.simulator.geometry,
+                                          {}, config_.preprocessing.mm_per_px));
   }
 
   [[nodiscard]] std::size_t objects() const { return objects_.size(); }
@@ -143,6 +154,7 @@ class library_experiment {
   /// std::invalid_argument for invalid ones.
   void set_library_params(const library_likelihood_params& params) {
     filter_->measurement_model().set_params(params);
+    if (shadow_) shadow_->measurement_model().set_params(params);
   }
   /// Object k's appearance: raised parts dark in its photograph.
   [[nodiscard]] bool raised_dark(std::size_t k) const { return dark_.at(k) != 0; }
@@ -168,6 +180,7 @@ class library_experiment {
       out.raised_dark = raised_dark(object);
       library_localizer_filter& f = *filter_;
       f.reset();
+      if (shadow_) shadow_->reset();
       open_set unknown(config_.open_set);
       touch_hooks hooks;
       hooks.rank = [&](std::span<const odometry> moves) {
@@ -176,7 +189,8 @@ class library_experiment {
                                             "library_experiment (active order)");
       };
       hooks.touched = [&](const touch_record& rec, const tactile_frame& frame) {
-        replay_touch(f, unknown, rec, frame, config_.preprocessing, out, same);
+        replay_touch(f, shadow_ ? &*shadow_ : nullptr, unknown, rec, frame, config_.preprocessing,
+                     out, same);
       };
       out.known_object = experiments_[object]->run(sequence, false, false, hooks).touches;
       return out;
@@ -184,7 +198,7 @@ class library_experiment {
     // The touched object's simulation (frames, truth, odometry) and its own filter's run.
     sequence_result single = experiments_[object]->run(sequence, true);
     library_sequence_result out = start(object, sequence, single);
-    replay(*filter_, single, config_.preprocessing, out, same);
+    replay(*filter_, shadow_ ? &*shadow_ : nullptr, single, config_.preprocessing, out, same);
     return out;
   }
 
@@ -196,7 +210,10 @@ class library_experiment {
     if (objects_.size() < 2)
       detail::fail("library_experiment::run_left_out: a library of ", objects_.size(),
                    " object; expected two or more (one is left out)");
-    if (left_out_.size() != objects_.size()) left_out_.resize(objects_.size());
+    if (left_out_.size() != objects_.size()) {
+      left_out_.resize(objects_.size());
+      left_out_shadow_.resize(objects_.size());
+    }
     if (!left_out_[object]) {
       std::vector<library_map> maps;
       for (std::size_t k = 0; k < objects_.size(); ++k)
@@ -205,13 +222,23 @@ class library_experiment {
       left_out_[object].emplace(make_library_filter(config_, maps, config_.simulator.geometry, {},
                                                     config_.preprocessing.mm_per_px));
       left_out_[object]->measurement_model().set_params(filter_->measurement_model().params());
+      if (shadowed()) {
+        // The shadow of the library the robot holds: the mirrored maps of that library.
+        left_out_shadow_[object].emplace(make_library_filter(config_, mirrored_maps(maps),
+                                                             config_.simulator.geometry, {},
+                                                             config_.preprocessing.mm_per_px));
+        left_out_shadow_[object]->measurement_model().set_params(
+            filter_->measurement_model().params());
+      }
     }
     sequence_result single = experiments_[object]->run(sequence, true);
     library_sequence_result out = start(object, sequence, single);
     out.open_set = true;
-    replay(*left_out_[object], single, config_.preprocessing, out, [object](Eigen::Index k) {
-      return static_cast<std::size_t>(k) + (static_cast<std::size_t>(k) >= object ? 1 : 0);
-    });
+    auto& shadow = left_out_shadow_[object];
+    replay(*left_out_[object], shadow ? &*shadow : nullptr, single, config_.preprocessing, out,
+           [object](Eigen::Index k) {
+             return static_cast<std::size_t>(k) + (static_cast<std::size_t>(k) >= object ? 1 : 0);
+           });
     return out;
   }
 
@@ -233,22 +260,31 @@ class library_experiment {
                                                        std::size_t other) {
     check_object(object);
     check_object(other);
-    if (single_.size() != objects_.size()) single_.resize(objects_.size());
+    if (single_.size() != objects_.size()) {
+      single_.resize(objects_.size());
+      single_shadow_.resize(objects_.size());
+    }
     const touch_protocol& p = *objects_[other].protocol;
     if (!single_[other]) {
       const pixel_size window = checked_tactile_window(config_.simulator.geometry, p.mm_per_px,
                                                        p.map_size(), "library_experiment");
       single_[other].emplace(make_planar_filter(config_, visual_map(other), p.mm_per_px, window));
+      if (shadowed())
+        single_shadow_[other].emplace(make_planar_filter(
+            config_, visual_map(other).rowwise().reverse().eval(), p.mm_per_px, window));
     }
     sequence_result single = experiments_[object]->run(sequence, true);
     library_sequence_result out = start(object, sequence, single);
     preprocess_params pp = config_.preprocessing;
     pp.mm_per_px = p.mm_per_px;  // what a localizer of that photograph is configured with
-    replay(*single_[other], single, pp, out, [other](Eigen::Index) { return other; });
+    auto& shadow = single_shadow_[other];
+    replay(*single_[other], shadow ? &*shadow : nullptr, single, pp, out,
+           [other](Eigen::Index) { return other; });
     return out;
   }
 
  private:
+  [[nodiscard]] bool shadowed() const { return config_.open_set.model == unknown_model::shadow; }
   void check_object(std::size_t object) const {
     if (object >= objects_.size())
       detail::fail("library_experiment::run: object ", object, "; expected 0 .. ",
@@ -271,17 +307,21 @@ class library_experiment {
   // predict, update, restart on the two documented causes, assess, and the open-set hypothesis
   // beside it (filter/open_set.hpp). `object_of` maps the filter's objects to the library's.
   template <class Filter, class ObjectOf>
-  void replay(Filter& f, const sequence_result& single, const preprocess_params& pp,
+  void replay(Filter& f, Filter* shadow, const sequence_result& single, const preprocess_params& pp,
               library_sequence_result& out, ObjectOf&& object_of) const {
     f.reset();
+    if (shadow) shadow->reset();
     open_set unknown(config_.open_set);
     for (std::size_t t = 0; t < single.touches.size(); ++t)
-      replay_touch(f, unknown, single.touches[t], single.frames[t], pp, out, object_of);
+      replay_touch(f, shadow, unknown, single.touches[t], single.frames[t], pp, out, object_of);
   }
 
-  // One touch of `replay` (its record `touch` and frame), appended to `out`.
+  // One touch of `replay` (its record `touch` and frame), appended to `out`. `shadow`, where
+  // given, is the open set's shadow filter (eq. 2 of filter/open_set.hpp): the same motions and
+  // touches on the mirrored maps, restarted with `f`, and on its own when a touch contradicts
+  // its prediction (its evidence is then the touch's under a uniform belief).
   template <class Filter, class ObjectOf>
-  void replay_touch(Filter& f, open_set& unknown, const touch_record& touch,
+  void replay_touch(Filter& f, Filter* shadow, open_set& unknown, const touch_record& touch,
                     const tactile_frame& frame, const preprocess_params& pp,
                     library_sequence_result& out, ObjectOf&& object_of) const {
     constexpr bool library = library_state_grid<typename Filter::grid_type>;
@@ -302,8 +342,13 @@ class library_experiment {
     rec.accepted = pre.accepted();
     rec.rejection = pre.rejection;
     std::optional<update_report> report;
+    const std::optional<odometry> moved =
+        t > 0 ? std::optional<odometry>(
+                    odometry{.dx_mm = rec.reported_dx_mm, .dy_mm = rec.reported_dy_mm})
+              : std::nullopt;
     double log_factor = 0.0;
     double best = 0.0;
+    double shadow_evidence = 0.0, shadow_best = 0.0;
     if (pre.accepted()) {
       const auto z = [&] {
         if constexpr (library)
@@ -324,10 +369,25 @@ class library_experiment {
       best = report->log_likelihood_max;
       rec.log_prediction_support = report->log_prediction_support;
       rec.contradicted = report->log_prediction_support < config_.confidence.contradiction;
+      std::optional<update_report> shadow_report;
+      if (shadow) {
+        shadow_report = detail::shadow_step(*shadow, moved, &z, rec.lost_track);
+        shadow_evidence = shadow_report->log_marginal_likelihood();
+        shadow_best = shadow_report->log_likelihood_max;
+      }
       // As the front doors weigh it (detail::follow_touch): a restart restarts the question.
       const double before = unknown.log_odds();
-      if (!rec.lost_track) unknown.observe(*report);
+      if (!rec.lost_track) {
+        if (shadow_report)
+          unknown.observe(*report, *shadow_report);
+        else
+          unknown.observe(*report);
+      }
       log_factor = before - unknown.log_odds();
+    } else if (shadow) {
+      using measurement = std::conditional_t<library, std::vector<image<float>>, image<float>>;
+      (void)detail::shadow_step(*shadow, moved, static_cast<const measurement*>(nullptr),
+                                rec.lost_track);
     }
     const auto est = f.estimate();
     const confidence conf = assess(f, est, config_.confidence);
@@ -362,6 +422,10 @@ class library_experiment {
     out.probability_unknown.push_back(pu);
     out.log_open_set_factor.push_back(log_factor);
     out.log_likelihood_max.push_back(best);
+    if (shadow) {
+      out.log_shadow_evidence.push_back(shadow_evidence);
+      out.shadow_log_likelihood_max.push_back(shadow_best);
+    }
     out.open_set_verdict.push_back(with_open_set(conf, pu, config_.confidence).verdict);
     std::size_t evaluated = 1;
     if constexpr (library) {
@@ -378,6 +442,11 @@ class library_experiment {
   std::optional<library_localizer_filter> filter_;
   std::vector<std::optional<library_localizer_filter>> left_out_;  // run_left_out, per object
   std::vector<std::optional<planar_localizer_filter>> single_;     // run_wrong_object, per map
+  // The open set's shadow filters (unknown_model::shadow): of the library, of each left-out
+  // library and of each single map.
+  std::optional<library_localizer_filter> shadow_;
+  std::vector<std::optional<library_localizer_filter>> left_out_shadow_;
+  std::vector<std::optional<planar_localizer_filter>> single_shadow_;
 };
 
 }  // namespace tacmap
