@@ -23,9 +23,15 @@
 
 // TACMAP_EXTERN_TEMPLATE: `extern template` for consumers of tacmap::precompiled, `template`
 // (the definitions) in src/instantiations.cpp, undefined for header-only use.
+// TACMAP_EXTERN_INSTANTIATIONS=1 declares the same instantiations `extern template` without the
+// run-time SIMD dispatch: the header-only kernels, with the common models compiled once in
+// another translation unit of the same build (src/instantiations.cpp compiled with the same
+// flags and without TACMAP_PRECOMPILED). tacmap's benchmarks use it (bench/CMakeLists.txt:
+// -O3 -march=x86-64-v3, which tacmap::precompiled is not built with).
 #if defined(TACMAP_PRECOMPILED_DEFINE)
 #define TACMAP_EXTERN_TEMPLATE template
-#elif defined(TACMAP_PRECOMPILED) && TACMAP_PRECOMPILED
+#elif (defined(TACMAP_PRECOMPILED) && TACMAP_PRECOMPILED) || \
+    (defined(TACMAP_EXTERN_INSTANTIATIONS) && TACMAP_EXTERN_INSTANTIATIONS)
 #define TACMAP_EXTERN_TEMPLATE extern template
 #endif
 
