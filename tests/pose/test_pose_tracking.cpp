@@ -412,6 +412,115 @@ TEST_CASE("a pose filter's estimate and verdict from its row summary equal the p
   check_summary_against_passes(f, 1e-9);
 }
 
+TEST_CASE("a summary refreshed where cells changed equals one computed afresh, bit for bit") {
+  // position_statistics::refresh recomputes only the rows a change touched (changed_cells).
+  // After random boxes of a latent pose belief change (each marked, in every layer, as the
+  // filter marks it), the refreshed summary's statistics must equal those of a summary computed
+  // from scratch exactly: a touched row left out, or a figure that depended on what was there
+  // before, would keep a stale value. A wide map and a narrow one; boxes of a few columns and,
+  // in the last round, up to the whole row.
+  for (const int width : {190, 60}) {
+    CAPTURE(width);
+    const tacmap::latent_grid<pose_grid_t> grid(
+        pose_grid_t(tacmap::planar_grid<float>({.width = width, .height = 64}, 3.4 / 3.0,
+                                               {.width = 18, .height = 42}),
+                    6),
+        {"as_photographed", "inverted"});
+    using G = std::decay_t<decltype(grid)>;
+    const Eigen::Index n = grid.size(), rows = grid.rows(), cols = grid.cols();
+    const Eigen::Index plane = rows * cols, layers = grid.hypothesis_size() / plane * 2;
+    std::uint32_t state = 12345U;
+    const auto next = [&state](Eigen::Index bound) {
+      state = state * 1664525U + 1013904223U;
+      return static_cast<Eigen::Index>((state >> 8) % static_cast<std::uint32_t>(bound));
+    };
+    Eigen::ArrayXf b(n);
+    for (Eigen::Index i = 0; i < n; ++i) b(i) = 1e-3F + static_cast<float>(next(1000)) * 1e-6F;
+    b /= b.sum();
+    const tacmap::detail::position_statistics<G> kept(grid);
+    REQUIRE(kept.summarises());
+    tacmap::detail::changed_cells changed(rows, cols);
+    kept.refresh(grid, {b.data(), n}, changed);  // the first refresh: everything
+    changed.clear();
+    for (int round = 0; round < 6; ++round) {
+      CAPTURE(round);
+      for (int box = 0; box < 3; ++box) {
+        const tacmap::grid_box g{.row = next(rows),
+                                 .col = next(cols),
+                                 .rows = 1 + next(6),
+                                 .cols = 1 + next(round == 5 ? cols : 12)};
+        changed.mark(g);
+        for (Eigen::Index l = 0; l < layers; ++l)
+          for (Eigen::Index r = g.row; r < std::min(rows, g.row + g.rows); ++r)
+            for (Eigen::Index c = g.col; c < std::min(cols, g.col + g.cols); ++c)
+              b(l * plane + r * cols + c) *= 0.1F * static_cast<float>(1 + next(20 + round * 4));
+      }
+      // Not renormalised: a renormalisation changes every cell (the filter's tracked update
+      // scales only the states it marks); the statistics take unnormalised beliefs.
+      kept.refresh(grid, {b.data(), n}, changed);
+      changed.clear();
+      const tacmap::detail::position_statistics<G> fresh(grid);
+      tacmap::detail::changed_cells everything(rows, cols);
+      fresh.refresh(grid, {b.data(), n}, everything);
+      const auto got = kept.estimate_summarised(grid);
+      const auto ref = fresh.estimate_summarised(grid);
+      CHECK(got.map_index == ref.map_index);
+      CHECK(got.mean_mm == ref.mean_mm);
+      CHECK(got.covariance_mm2 == ref.covariance_mm2);
+      CHECK(got.entropy_nats == ref.entropy_nats);
+      CHECK(got.hypothesis_probability == ref.hypothesis_probability);
+      CHECK(kept.most_probable_disc_summarised(grid, 5.0) ==
+            fresh.most_probable_disc_summarised(grid, 5.0));
+      // And the summary against the per-state passes (its figures, not only its refresh).
+      const typename tacmap::detail::position_statistics<G>::view_type v(b.data(), n);
+      const auto per_state = fresh.estimate_per_state(grid, v);
+      CHECK(got.map_index == per_state.map_index);
+      CHECK((got.mean_mm - per_state.mean_mm).head(2).cwiseAbs().maxCoeff() <= 1e-9 * 100.0);
+      CHECK(got.entropy_nats == doctest::Approx(per_state.entropy_nats).epsilon(1e-6));
+    }
+  }
+}
+
+TEST_CASE("a pose grid's statistics from one layer's coordinates: each state's own coordinates") {
+  // position_statistics keeps a pose grid's first layer of positions and one angle per layer
+  // (every layer repeats the positions by construction). Its per-state statistics must be those
+  // of every state's own coordinates (grid.state_mm): the mass within a disc, the mass within
+  // a heading tolerance, the mean position — summed here state by state from state_mm. An
+  // offset taken from the wrong layer or position would move them.
+  const tacmap::latent_grid<pose_grid_t> grid(grid64(12), {"as_photographed", "inverted"});
+  using G = std::decay_t<decltype(grid)>;
+  const Eigen::Index n = grid.size();
+  Eigen::ArrayXf b(n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    b(i) = std::exp(-0.002F * static_cast<float>((i * 7919) % 4001)) *
+           (1.0F + static_cast<float>((i / (grid.rows() * grid.cols())) % 5));
+  b /= b.sum();
+  const tacmap::detail::position_statistics<G> stats(grid);
+  const typename tacmap::detail::position_statistics<G>::view_type v(b.data(), n);
+  const Eigen::Vector2d centre(20.0, 30.0);
+  double in_disc = 0.0, in_heading = 0.0, mx = 0.0, my = 0.0, mass = 0.0;
+  const double heading = grid.state_mm(5 * grid.rows() * grid.cols())(2);
+  // The mean as estimate sums it: the origin plus the belief-weighted offsets from it.
+  const auto origin = grid.state_mm(0);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto s = grid.state_mm(i);
+    const auto p = static_cast<double>(b(i));
+    if ((s.head<2>() - centre).norm() <= 6.0) in_disc += p;
+    if (std::abs(tacmap::wrap_angle(s(2) - heading)) <= 0.6) in_heading += p;
+    mx += p * (s(0) - origin(0));
+    my += p * (s(1) - origin(1));
+    mass += p;
+  }
+  CHECK(stats.probability_within(v, centre, 6.0) == doctest::Approx(in_disc).epsilon(1e-9));
+  CHECK(stats.heading_probability_within(v, heading, 0.6) ==
+        doctest::Approx(in_heading).epsilon(1e-9));
+  CHECK(in_heading < 0.5 * mass);  // the tolerance leaves out most headings
+  const auto e = stats.estimate_per_state(grid, v);
+  CHECK(e.mean_mm(0) == doctest::Approx(origin(0) + mx).epsilon(1e-9));
+  CHECK(e.mean_mm(1) == doctest::Approx(origin(1) + my).epsilon(1e-9));
+  CHECK(mass == doctest::Approx(1.0).epsilon(1e-6));
+}
+
 TEST_CASE("the front door's pose filter, tracking with the motion floor: summary against passes") {
   // The default models (latent appearance: two hypothesis blocks; the robust motion's floor on
   // every state), through tacmap::localizer with tracking: each touch's statistics against the
