@@ -96,8 +96,10 @@ TEST_CASE("library_localizer: touch_at turns the arm's poses into the same odome
     const auto a =
         t == 0 ? by_motion.touch(frame) : by_motion.touch(frame, sequence[t].measured_motion);
     // A small yaw jitter (under the 5 degrees a known heading allows) changes nothing.
-    const auto b = by_pose.touch_at(
-        frame, {.x_mm = arm.x_mm, .y_mm = arm.y_mm, .theta_rad = arm.theta_rad + 0.01 * (t % 2)});
+    const auto b =
+        by_pose.touch_at(frame, {.x_mm = arm.x_mm,
+                                 .y_mm = arm.y_mm,
+                                 .theta_rad = arm.theta_rad + (t % 2 == 0 ? 0.0 : 0.01)});
     CHECK(b.object == a.object);
     CHECK((b.position_mm - a.position_mm).norm() < 1e-9);
     REQUIRE(b.object_probability.size() == a.object_probability.size());
