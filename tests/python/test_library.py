@@ -397,10 +397,15 @@ class TestConfigurationParts(unittest.TestCase):
 
     def test_optional_parts_take_none_true_or_parameters(self):
         cfg = tacmap.LocalizerConfig()
-        for name in ("calibrate_sensor", "tracking", "slip_recheck", "working_mm_per_px"):
+        for name in ("calibrate_sensor", "slip_recheck", "working_mm_per_px"):
             self.assertIsNone(getattr(cfg, name), name)
             self.assertIn(name + "=None", repr(cfg))
             self.assertIn(name + " = None", tacmap.LocalizerConfig.__doc__)
+        # Tracking is on by default (TrackingParams.default()); None turns it off, and the
+        # paper's configuration evaluates the whole grid.
+        self.assertEqual(repr(cfg.tracking), repr(tacmap.TrackingParams.default()))
+        self.assertIsNone(tacmap.LocalizerConfig(tracking=None).tracking)
+        self.assertIsNone(tacmap.LocalizerConfig.paper().tracking)
         cfg = tacmap.LocalizerConfig(calibrate_sensor=True, tracking=True, slip_recheck=True,
                                      working_mm_per_px=0.5,
                                      burst=tacmap.BurstParams(statistic="trimmed_mean"))
@@ -424,7 +429,7 @@ class TestConfigurationParts(unittest.TestCase):
         self.assertIsNone(cfg.tracking)
         self.assertIsNone(cfg.slip_recheck)
         # The simulated experiment's configuration takes the same keywords.
-        self.assertEqual(tacmap.LocalizationConfig(tracking=True).tracking.recheck_every, 16)
+        self.assertEqual(tacmap.LocalizationConfig(tracking=True).tracking.recheck_every, 64)
 
     def test_bad_parts_are_refused_naming_the_value(self):
         with self.assertRaisesRegex(TypeError, "calibrate_sensor = 'yes' has the wrong type"):
