@@ -288,7 +288,7 @@ TEST_CASE("the default localizer tracks once localized, and a kidnap is found as
     CHECK(full.before[t].path == tacmap::update_path::full);
     if (localized) {
       ++after_localized;
-      tracked_touches += tracked.before[t].path == tacmap::update_path::tracked ? 1 : 0;
+      tracked_touches += tracked.before[t].path == tacmap::update_path::tracked ? 1U : 0U;
     }
     localized = localized || tracked.before[t].verdict == tacmap::verdict::localized;
     CHECK((tracked.before[t].position_mm - full.before[t].position_mm).norm() < 1.5);
