@@ -58,7 +58,8 @@ class TestLibraryLocalizer(unittest.TestCase):
         # y, mixed up the motion or misread the result would part them.
         p = gecko()
         lib = tacmap.LibraryLocalizer([("gecko", p.map, p.mm_per_px)], fast_config())
-        loc = tacmap.Localizer(p.map, p.mm_per_px, fast_config())
+        # Untracked, as the library's filter is (tracking is the Localizer's alone).
+        loc = tacmap.Localizer(p.map, p.mm_per_px, fast_config(tracking=None))
         self.assertEqual(lib.mm_per_px, loc.mm_per_px)
         on_lib, truths = library_sequence(lib, simulator(21), 0)
         on_loc, _ = test_tacmap.run_sequence(loc, simulator(21), 0)
