@@ -237,6 +237,7 @@ inline std::vector<std::string> localizer_config_fields() {
           "burst",
           "calibrate_sensor",
           "tracking",
+          "tracking_headings",
           "working_mm_per_px"};
 }
 

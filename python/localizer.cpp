@@ -199,13 +199,15 @@ void bind_config(py::module_& m) {
       .def_readwrite("doubt", &tracking_params::doubt,
                      "The estimated log_prediction_support of a tracked update below which the "
                      "whole grid is evaluated instead (-inf: never).")
+      .def_readwrite("sample_every", &tracking_params::sample_every,
+                     "Each tracked update also evaluates every this many-th row of the grid "
+                     "(shifting by one row each touch): the sample this touch's doubt is judged "
+                     "against (0: the last whole-grid update's evidence).")
       .def_static("default", &default_tracking,
                   "The values chosen by measurement for the localizer's default filter (C++ "
-                  "default_tracking()): epsilon 1e-9, the whole grid every 16 tracked touches "
-                  "and when the support estimate falls below 3 nats. LocalizerConfig(tracking="
-                  "True) uses them.");
+                  "default_tracking()), what LocalizerConfig uses unless told otherwise.");
   keyword_struct<tracking_params>(
-      tp, {"epsilon", "tolerance", "max_support", "recheck_every", "doubt"},
+      tp, {"epsilon", "tolerance", "max_support", "recheck_every", "doubt", "sample_every"},
       "Tracking (C++ tacmap::tracking_params, filter/bayes_filter.hpp): once the belief is "
       "concentrated, a touch evaluates the likelihood only where the belief is and checks the "
       "whole grid when the touch doubts the prediction and every recheck_every touches. The "
@@ -266,6 +268,10 @@ void bind_config(py::module_& m) {
                      "Frame thresholds (PreprocessParams); mm_per_px is replaced by the map's.")
       .def_readwrite("confidence", &localizer_config::confidence,
                      "When the verdict is 'localized' or 'contradicted' (ConfidenceParams).")
+      .def_readwrite("tracking_headings", &localizer_config::tracking_headings,
+                     "Whether tracking applies with headings > 0 too (C++ "
+                     "localizer_config::tracking_headings). False (the default): measured, a "
+                     "tracked touch there cost as much as the whole grid.")
       .def_readwrite("headings", &localizer_config::headings,
                      "Unknown orientation: 0 localizes over (x, y) with the heading known (the "
                      "paper); N >= 1 over (x, y, theta) with N headings (descriptor models only; "
@@ -390,9 +396,9 @@ void bind_config(py::module_& m) {
   optional_params_property<localizer_config>(
       cfg, "tracking", &localizer_config::tracking, default_tracking(),
       "Tracking (TrackingParams): once the belief is concentrated, a touch evaluates the "
-      "likelihood only where the belief is. None (the default): every touch evaluates the "
-      "whole grid. True: TrackingParams.default(). Localizer only (a library evaluates every "
-      "object's grid).");
+      "likelihood only where the belief is and a sample of the rest. TrackingParams.default() "
+      "(the default, also True); None: every touch evaluates the whole grid. Localizer only (a "
+      "library evaluates every object's grid).");
   optional_params_property<localizer_config>(
       cfg, "slip_recheck", &localizer_config::slip_recheck, slip_recheck_params{},
       "A touch that doubts its prediction is looked at again as a slip (SlipRecheckParams). "
@@ -543,6 +549,11 @@ void bind_localizer(py::module_& m) {
                     "'anywhere on the map' (nats); 0 for a rejected frame.")
       .def_readonly("log_marginal_likelihood", &touch_result::log_marginal_likelihood,
                     "The touch's evidence log p(z_t | z_1..t-1); 0 for a rejected frame.")
+      .def_property_readonly(
+          "path", [](const touch_result& r) { return std::string(to_string(r.path)); },
+          "Which states the touch's update evaluated: 'tracked' once the belief is "
+          "concentrated (LocalizerConfig.tracking), else the whole grid and why ('full', "
+          "'full (contradicted)', ...).")
       .def_property_readonly(
           "rejection",
           [](const touch_result& r) { return choice_name(r.rejection, rejection_names); },

@@ -591,10 +591,23 @@ int main(int argc, char** argv) try {
       ->delimiter(',')
       ->check(CLI::Range(0, 3600));
   bool tracking = false;
-  app.add_flag(
-      "--tracking", tracking,
-      "the filter tracks once localized (tacmap::default_tracking(): the likelihood only "
-      "where the prediction holds its mass, the whole grid every 16 touches and on doubt)");
+  app.add_flag("--tracking", tracking,
+               "the filter tracks once localized with tacmap::default_tracking() changed by the "
+               "--tracking-* options (the default already tracks with default_tracking())");
+  bool no_tracking = false;
+  app.add_flag("--no-tracking", no_tracking,
+               "every touch evaluates the whole grid (localizer_config::tracking empty; the "
+               "default tracks once localized)");
+  tacmap::tracking_params tracking_tuned = tacmap::default_tracking();
+  app.add_option("--tracking-doubt", tracking_tuned.doubt,
+                 "--tracking: the estimated prediction support (nats) below which a touch takes "
+                 "the whole grid");
+  app.add_option("--tracking-recheck", tracking_tuned.recheck_every,
+                 "--tracking: the whole grid every this many tracked touches (0 = never)");
+  app.add_option("--tracking-sample", tracking_tuned.sample_every,
+                 "--tracking: each tracked touch also evaluates every this many-th row of the "
+                 "grid, the sample its doubt is judged against (0 = none)");
+
   std::vector<std::string> touch_orders{"random"};
   app.add_option("--touch-order", touch_orders,
                  "where each touch after the first goes: random (the protocol's random orders) "
@@ -885,7 +898,8 @@ int main(int argc, char** argv) try {
     base.faults = faults;
     base.self_calibrate = self_calibrate >= 0;
     base.calibration_warmup = self_calibrate > 0 ? static_cast<std::size_t>(self_calibrate) : 0;
-    if (tracking) base.tracking = tacmap::default_tracking();
+    if (tracking) base.tracking = tracking_tuned;
+    if (no_tracking) base.tracking.reset();
     if (slip_recheck) base.slip_recheck = recheck;
     if (kind == tacmap::measurement_kind::ncc) {
       for (const auto& t : tau_values) {

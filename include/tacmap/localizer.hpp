@@ -175,6 +175,12 @@ struct localizer_config {
   /// slips and kidnaps but loses 4 sequences without faults.
   static constexpr double default_lost_probability = 0.001;
   [[nodiscard]] double lost() const { return lost_probability.value_or(default_lost_probability); }
+  /// The tracking the localizer's filter runs: `tracking`, unless the heading is localized
+  /// (headings > 0) and `tracking_headings` is off.
+  [[nodiscard]] std::optional<tracking_params> tracking_for_filter() const {
+    if (headings > 0 && !tracking_headings) return std::nullopt;
+    return tracking;
+  }
   /// The probability that a move is off by more than `motion_sigma_mm`, and that wider
   /// component's spread (`robust_motion`): odometry outliers, noise larger than configured.
   /// Empty: `default_wide_probability`; 0: none.
@@ -242,16 +248,28 @@ struct localizer_config {
   /// grid: turn it on for a sensor that has seen use.
   std::optional<self_calibration_params> calibrate_sensor;
   /// Tracking (`bayes_filter::set_tracking`): once the belief is concentrated, a touch evaluates
-  /// the likelihood only where the belief is, carries the motion floor's share as one number
-  /// and checks the whole grid when the touch doubts the prediction and every
-  /// `recheck_every` touches (`default_tracking()`). Empty (the default): every touch
-  /// evaluates the whole grid, as before. Measured (tacmap-evaluate --tracking, realistic,
-  /// kidnaps): 145 against 147 of 175 kidnaps recovered within 3 touches, the verdict's ECE
-  /// unchanged; a localized touch on the paper's grid 165 -> 71 us, 36 headings 12.1 -> 1.9 ms.
-  /// Kept off by default, measured (realistic, 9 maps, seeds 1-3): without faults the same 573
-  /// of 594 sequences localized and the same ECE (within 0.1 point), but kidnaps at touch 7 of
-  /// 12 recovered within 3 touches 422 against 429 of 583, 1.2 points fewer.
-  std::optional<tracking_params> tracking;
+  /// the likelihood only where the belief is and on a sample of every 8th row of the rest, and
+  /// the whole grid when the touch doubts the prediction and every 64 touches
+  /// (`default_tracking()`, the default; `touch_result::path` says which a touch took). Known
+  /// heading only unless `tracking_headings`. Empty: every touch evaluates the whole grid (the
+  /// default before, and the paper's). Measured against empty in the same runs
+  /// (tacmap-evaluate --scenario realistic, the gecko and 8 photographs, seeds 1-3): without
+  /// faults the same 573 of 594 localized, ECE 2.0 / 3.7 / 3.4 points against 2.0 / 3.7 / 3.3;
+  /// 12 touches with a kidnap at touch 7, back within 3 touches 434 of 558 against 429 of 553,
+  /// within 5 507 of 558 against 501 of 553; a 20 mm slip at touch 7, within 3 293 of 436
+  /// against 286 of 432, within 5 369 of 436 against 365 of 432. A localized touch on the
+  /// paper's grid (camera_bench, CPU time) 137 against 234 us. A belief spread over more than a
+  /// quarter of the states (the first touches, a small map) takes the whole grid anyway: no grid
+  /// size needs a rule of its own.
+  std::optional<tracking_params> tracking = default_tracking();
+  /// Whether `tracking` applies to the (x, y, theta) filter (headings > 0) as well. Off by
+  /// default, measured: there a tracked touch cost what the whole grid costs (paper's grid, 36
+  /// headings, camera_bench CPU time: 13.5 against 13.1 ms), because the sample's rows reach
+  /// the map's edges, where the rotated model's patches that fall off the map need a pass over
+  /// every heading; without the sample (`sample_every` = 0) it is several times cheaper, but
+  /// slips then come back later (at known heading: 356 of 437 within 5 touches against 365 of
+  /// 432 untracked).
+  bool tracking_headings = false;
   /// The working resolution, mm per px: the scale the map is matched at. A photograph finer
   /// than it is resampled to it (area-averaged) before the map is prepared, so that what a
   /// touch and a map's preparation cost is set by the object's area and the sensor's
@@ -295,6 +313,7 @@ struct localizer_config {
     c.lost_probability = 0.0;
     c.wide_probability = 0.0;
     c.broad_probability = 0.0;
+    c.tracking.reset();  // the paper evaluated the whole grid at every touch
     return c;
   }
 
@@ -1239,6 +1258,9 @@ struct touch_result {
   /// 0 for a rejected frame.
   double log_prediction_support = 0.0;
   double log_marginal_likelihood = 0.0;
+  /// Which states this touch's update evaluated (`localizer_config::tracking`): `tracked` once
+  /// the belief is concentrated, else the whole grid and why; `full` for a rejected frame.
+  tacmap::update_path path = tacmap::update_path::full;
   /// Why the frame was rejected (none when it was used).
   frame_rejection rejection = frame_rejection::none;
   /// The filter started again from a uniform belief at this touch, for one of two causes only
@@ -1446,7 +1468,8 @@ class basic_localizer {
                    " has no (x, y, theta) model (pose_model and pose(), localizer.hpp P1); use "
                    "headings = 0 or give the policy a pose model");
     }
-    if (config_.tracking) with_filter([&](auto& f) { f.set_tracking(*config_.tracking); });
+    if (const auto t = config_.tracking_for_filter())
+      with_filter([&](auto& f) { f.set_tracking(*t); });
   }
 
   /// The first touch of an exploration (or one without motion since the previous touch).
@@ -1750,6 +1773,7 @@ class basic_localizer {
     if (out.report) {
       r.log_prediction_support = out.report->log_prediction_support;
       r.log_marginal_likelihood = out.report->log_marginal_likelihood();
+      r.path = out.report->path;
     }
     r.touches = touches_;
     return r;

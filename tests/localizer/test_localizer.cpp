@@ -241,6 +241,81 @@ TEST_CASE("a kidnap: contradicted at once without the wide component, never conf
     if (v == tacmap::verdict::localized) CHECK(error_mm < 5.0);
 }
 
+// The default localizer (tracking on) against the same one with tracking off, on sequence 0 and
+// then kidnapped to its farthest location (the arm reporting no motion): every touch's result.
+struct kidnap_run {
+  std::vector<tacmap::touch_result> before, after;
+  Eigen::Vector2d truth;
+};
+kidnap_run default_kidnap(const tacmap::localizer_config& config) {
+  const auto& p = gecko();
+  tacmap::localizer loc(p.map, p.mm_per_px, config);
+  auto sim = gecko_simulator(11);
+  const auto& seq = p.sequences[0];
+  kidnap_run run;
+  for (std::size_t t = 0; t < seq.size(); ++t) {
+    const auto frame = sim.render(p.locations[seq[t].location].pose());
+    run.before.push_back(t == 0 ? loc.touch(frame) : loc.touch(frame, seq[t].measured_motion));
+  }
+  const auto& last = p.locations[seq.back().location];
+  std::size_t far = 0;
+  double farthest = 0.0;
+  for (std::size_t i = 0; i < p.locations.size(); ++i) {
+    const double d = std::hypot(p.locations[i].x_mm - last.x_mm, p.locations[i].y_mm - last.y_mm);
+    if (d > farthest) farthest = d, far = i;
+  }
+  run.truth = {p.locations[far].x_mm, p.locations[far].y_mm};
+  for (int t = 0; t < 3; ++t)
+    run.after.push_back(loc.touch(sim.render(p.locations[far].pose()), tacmap::odometry{}));
+  return run;
+}
+
+TEST_CASE("the default localizer tracks once localized, and a kidnap is found as untracked") {
+  const tacmap::localizer_config tracked_config;
+  REQUIRE(tracked_config.tracking.has_value());
+  CHECK(tracked_config.tracking->epsilon == tacmap::default_tracking().epsilon);
+  tacmap::localizer_config full_config;
+  full_config.tracking.reset();
+  const kidnap_run tracked = default_kidnap(tracked_config);
+  const kidnap_run full = default_kidnap(full_config);
+  REQUIRE(tracked.before.back().verdict == tacmap::verdict::localized);
+  REQUIRE(full.before.back().verdict == tacmap::verdict::localized);
+  // Once localized the default takes the tracked path; with tracking off, never.
+  std::size_t tracked_touches = 0, after_localized = 0;
+  bool localized = false;
+  for (std::size_t t = 0; t < tracked.before.size(); ++t) {
+    CAPTURE(t);
+    CHECK(full.before[t].path == tacmap::update_path::full);
+    if (localized) {
+      ++after_localized;
+      tracked_touches += tracked.before[t].path == tacmap::update_path::tracked ? 1U : 0U;
+    }
+    localized = localized || tracked.before[t].verdict == tacmap::verdict::localized;
+    CHECK((tracked.before[t].position_mm - full.before[t].position_mm).norm() < 1.5);
+    CHECK(tracked.before[t].verdict == full.before[t].verdict);
+  }
+  REQUIRE(after_localized >= 2);
+  CHECK(tracked_touches + 1 >= after_localized);
+  // The kidnap: the first touch after it doubts the prediction, so the whole grid is evaluated
+  // (a doubt signal that missed it would track on at the old place), and the sensor is found
+  // again no later than with tracking off, as surely.
+  CHECK(tracked.after[0].path == tacmap::update_path::full_contradicted);
+  const auto found = [](const kidnap_run& run) {
+    for (std::size_t t = 0; t < run.after.size(); ++t)
+      if ((run.after[t].position_mm - run.truth).norm() < 5.0) return static_cast<int>(t);
+    return 99;
+  };
+  REQUIRE(found(full) < 3);
+  CHECK(found(tracked) <= found(full));
+  for (std::size_t t = 0; t < 3; ++t) {
+    CAPTURE(t);
+    CHECK(tracked.after[t].probability_within ==
+          doctest::Approx(full.after[t].probability_within).epsilon(0.05));
+    if (tracked.after[t].verdict == tacmap::verdict::localized)
+      CHECK((tracked.after[t].position_mm - tracked.truth).norm() < 5.0);
+  }
+}
+
 TEST_CASE("a localizer refuses bad input with messages that say what to do") {
   const auto& p = gecko();
   CHECK_THROWS_WITH_AS(tacmap::localizer(tacmap::image<float>(), 1.0),
@@ -397,11 +472,12 @@ TEST_CASE("a localizer with a self-calibrating sensor finds a dead taxel and kee
                        doctest::Contains("window = 0"), std::invalid_argument);
 }
 
-TEST_CASE("localizer_config::tracking turns tracking on, and the tracked localizer agrees") {
+TEST_CASE("localizer_config::tracking turns tracking off and on, and the two agree") {
   const auto& p = gecko();
-  tacmap::localizer_config tracked_config;
+  tacmap::localizer_config tracked_config, full_config;
   tracked_config.tracking = tacmap::default_tracking();
-  tacmap::localizer full(p.map, p.mm_per_px);
+  full_config.tracking.reset();
+  tacmap::localizer full(p.map, p.mm_per_px, full_config);
   tacmap::localizer tracked(p.map, p.mm_per_px, tracked_config);
   REQUIRE(tracked.planar_filter() != nullptr);
   CHECK(tracked.planar_filter()->tracking().epsilon == tacmap::default_tracking().epsilon);
@@ -418,8 +494,12 @@ TEST_CASE("localizer_config::tracking turns tracking on, and the tracked localiz
     CHECK(b.probability_within == doctest::Approx(a.probability_within).epsilon(0.02));
     CHECK(b.verdict == a.verdict);
   }
-  // With unknown heading the rotated model's tracking hook is reached too.
+  // With unknown heading tracking applies only when asked for (tracking_headings): there the
+  // sample costs as much as the whole grid. Asked for, the rotated model's hook is reached.
   tracked_config.headings = 8;
+  CHECK(tacmap::localizer(p.map, p.mm_per_px, tracked_config).pose_filter()->tracking().epsilon ==
+        0.0);
+  tracked_config.tracking_headings = true;
   tacmap::localizer pose(p.map, p.mm_per_px, tracked_config);
   REQUIRE(pose.pose_filter() != nullptr);
   CHECK(pose.pose_filter()->tracking().epsilon > 0.0);

@@ -82,10 +82,15 @@ TEST_CASE("an unflagged slip leaves no 'localized' claim on the old place at the
   // Slips of 20 mm in eight directions after two sequences. Without the recheck the floor alone
   // (lost_probability) gives the slipped place too little mass, and the localizer goes on
   // claiming the old place (measured: once in 13 slips); the recheck must leave no such claim.
+  // Both untracked: what the recheck adds to the floor alone on the whole grid. (The default
+  // tracks: its sampled doubt takes the slipped touch to the whole grid, measured with no stale
+  // claim here either.)
   auto without = fast_config();
   without.slip_recheck.reset();  // the default: off
+  without.tracking.reset();
   auto with = fast_config();
   with.slip_recheck = tacmap::slip_recheck_params{};
+  with.tracking.reset();
   int slips = 0, stale_without = 0, stale_with = 0, wrong_with = 0;
   for (std::size_t q : {0U, 5U})
     for (int d = 0; d < 8; ++d) {

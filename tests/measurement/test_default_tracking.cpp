@@ -105,6 +105,37 @@ TEST_CASE("default_tracking: the chosen parameters are valid and turn the floor'
   bad = p;
   bad.doubt = std::numeric_limits<double>::quiet_NaN();
   CHECK_THROWS_AS(bad.validate(), std::invalid_argument);
+  bad = p;
+  bad.sample_every = -2;
+  CHECK_THROWS_WITH_AS(bad.validate(), doctest::Contains("sample_every = -2"),
+                       std::invalid_argument);
+  // The localizer tracks by default, with these values; the paper's configuration does not.
+  REQUIRE(tacmap::localizer_config{}.tracking.has_value());
+  CHECK(tacmap::localizer_config{}.tracking->sample_every == p.sample_every);
+  CHECK(p.sample_every > 0);
+  CHECK_FALSE(tacmap::localizer_config::paper().tracking.has_value());
+}
+
+TEST_CASE("the doubt's sample: every k-th row of every layer, outside the support") {
+  std::vector<tacmap::state_range> rows;
+  // 5 rows x 4 columns, 2 layers, every 2nd row from row 1: rows 1 and 3 of each layer.
+  tacmap::detail::sample_rows(5, 4, 2, 2, 1, rows);
+  CHECK(rows == std::vector<tacmap::state_range>{{4, 8}, {12, 16}, {24, 28}, {32, 36}});
+  // The offset wraps; every = 0 samples nothing.
+  tacmap::detail::sample_rows(5, 4, 1, 2, 3, rows);
+  CHECK(rows == std::vector<tacmap::state_range>{{4, 8}, {12, 16}});
+  tacmap::detail::sample_rows(5, 4, 1, 0, 0, rows);
+  CHECK(rows.empty());
+  // Less the support: ranges cut where the support overlaps them, kept whole elsewhere.
+  const std::vector<tacmap::state_range> sample{{0, 10}, {20, 30}, {40, 50}};
+  const std::vector<tacmap::state_range> support{{5, 7}, {9, 22}, {28, 31}, {60, 70}};
+  std::vector<tacmap::state_range> out;
+  tacmap::detail::ranges_minus(sample, support, out);
+  CHECK(out == std::vector<tacmap::state_range>{{0, 5}, {7, 9}, {22, 28}, {40, 50}});
+  // The union of the support and the sample outside it: sorted, touching ranges joined.
+  std::vector<tacmap::state_range> both;
+  tacmap::detail::ranges_union(support, out, both);
+  CHECK(both == std::vector<tacmap::state_range>{{0, 31}, {40, 50}, {60, 70}});
 }
 
 TEST_CASE("the default motion's windowed predict moves a box as its whole-grid predict does") {
@@ -311,10 +342,61 @@ TEST_CASE("a kidnap under tracking: the whole grid is checked and the new place 
   }
   REQUIRE(found_full >= 0);
   CHECK(whole_grid >= 1);
-  // Found within a few touches of the full filter: at worst after the scheduled re-check.
+  // Found as soon as the full filter finds it: the doubt sends the touch to the whole grid,
+  // and the floor the windowed predicts left out is put back first (without it the new place
+  // started from the last whole-grid posterior's values and the old place was kept).
   REQUIRE(found_tracked >= 0);
-  CHECK(found_tracked <= found_full + tacmap::default_tracking().recheck_every);
+  CHECK(found_tracked <= found_full);
   CHECK((tracked.estimate().map_mm - full.estimate().map_mm).norm() <= mm_per_px * 1.5);
+}
+
+TEST_CASE("a whole-grid update after windowed predicts puts the floor back first") {
+  // Tracked along a walk (windowed predicts), then a touch that the doubt sends to the whole
+  // grid: the belief it starts from is (1 - lambda) b + lambda / N, as the whole grid's predict
+  // would have left it, so the posterior agrees with the full filter's far from the old place.
+  auto full = default_filter();
+  walk w;
+  for (int k = 0; k < 3; ++k) {
+    full.predict(w.next());
+    full.update(touch_at(w.row, w.col, static_cast<unsigned>(k + 1)));
+  }
+  auto tracked = full;
+  tracked.set_tracking(tacmap::default_tracking());
+  int windowed = 0;
+  for (int step = 0; step < 4; ++step) {
+    const tacmap::odometry u = w.next();
+    windowed += tracked.predict(u).windowed ? 1 : 0;
+    full.predict(u);
+    const auto z = touch_at(w.row, w.col, static_cast<unsigned>(step + 90));
+    CHECK(tracked.update(z).path == update_path::tracked);
+    full.update(z);
+  }
+  REQUIRE(windowed >= 3);
+  const tacmap::odometry u = w.next();
+  REQUIRE(tracked.predict(u).windowed);
+  full.predict(u);
+  // The reference: an untracked filter whose prediction is the windowed one with the floor
+  // put back, (1 - lambda) b + lambda / N.
+  auto reference = full;
+  const double lambda = tacmap::localizer_config::default_lost_probability;
+  const auto n = static_cast<double>(tracked.grid().size());
+  reference.set_prior((tracked.belief().template cast<double>() * (1.0 - lambda) + lambda / n)
+                          .template cast<float>());
+  // Far from the walk: the doubt fires.
+  const auto z = touch_at(10, 110, 95);
+  const auto rt = tracked.update(z);
+  full.update(z);
+  reference.update(z);
+  REQUIRE(rt.path == update_path::full_contradicted);
+  CHECK(total_variation(tracked.belief(), reference.belief()) <= 1e-5);
+  // Without the floor put back the new place started from the last whole-grid posterior's
+  // values; with it, its mass is the full filter's, up to what tracking left elsewhere.
+  const Eigen::Index cell = 10 * full.grid().cols() + 110;
+  const double p_tracked = static_cast<double>(tracked.belief()(cell));
+  const double p_full = static_cast<double>(full.belief()(cell));
+  REQUIRE(p_full > 0.0);
+  CHECK(p_tracked / p_full == doctest::Approx(1.0).epsilon(0.5));
+  CHECK(total_variation(tracked.belief(), full.belief()) <= 0.1);
 }
 
 }  // namespace test_default_tracking

@@ -528,6 +528,7 @@ TEST_CASE("the front door's pose filter, tracking with the motion floor: summary
   tacmap::localizer_config c;
   c.headings = 12;
   c.tracking = tacmap::default_tracking();
+  c.tracking_headings = true;  // off by default with headings
   const double mm_per_px = 3.4 / 3.0;
   tacmap::localizer loc(map64(), mm_per_px, c);
   tacmap::tactile_simulator sim(map64() * 4.0F, {.width = 64, .height = 64}, mm_per_px,

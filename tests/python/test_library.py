@@ -58,7 +58,8 @@ class TestLibraryLocalizer(unittest.TestCase):
         # y, mixed up the motion or misread the result would part them.
         p = gecko()
         lib = tacmap.LibraryLocalizer([("gecko", p.map, p.mm_per_px)], fast_config())
-        loc = tacmap.Localizer(p.map, p.mm_per_px, fast_config())
+        # Untracked, as the library's filter is (tracking is the Localizer's alone).
+        loc = tacmap.Localizer(p.map, p.mm_per_px, fast_config(tracking=None))
         self.assertEqual(lib.mm_per_px, loc.mm_per_px)
         on_lib, truths = library_sequence(lib, simulator(21), 0)
         on_loc, _ = test_tacmap.run_sequence(loc, simulator(21), 0)
@@ -424,10 +425,15 @@ class TestConfigurationParts(unittest.TestCase):
 
     def test_optional_parts_take_none_true_or_parameters(self):
         cfg = tacmap.LocalizerConfig()
-        for name in ("calibrate_sensor", "tracking", "slip_recheck", "working_mm_per_px"):
+        for name in ("calibrate_sensor", "slip_recheck", "working_mm_per_px"):
             self.assertIsNone(getattr(cfg, name), name)
             self.assertIn(name + "=None", repr(cfg))
             self.assertIn(name + " = None", tacmap.LocalizerConfig.__doc__)
+        # Tracking is on by default (TrackingParams.default()); None turns it off, and the
+        # paper's configuration evaluates the whole grid.
+        self.assertEqual(repr(cfg.tracking), repr(tacmap.TrackingParams.default()))
+        self.assertIsNone(tacmap.LocalizerConfig(tracking=None).tracking)
+        self.assertIsNone(tacmap.LocalizerConfig.paper().tracking)
         cfg = tacmap.LocalizerConfig(calibrate_sensor=True, tracking=True, slip_recheck=True,
                                      working_mm_per_px=0.5,
                                      burst=tacmap.BurstParams(statistic="trimmed_mean"))
@@ -451,7 +457,7 @@ class TestConfigurationParts(unittest.TestCase):
         self.assertIsNone(cfg.tracking)
         self.assertIsNone(cfg.slip_recheck)
         # The simulated experiment's configuration takes the same keywords.
-        self.assertEqual(tacmap.LocalizationConfig(tracking=True).tracking.recheck_every, 16)
+        self.assertEqual(tacmap.LocalizationConfig(tracking=True).tracking.recheck_every, 64)
 
     def test_bad_parts_are_refused_naming_the_value(self):
         with self.assertRaisesRegex(TypeError, "calibrate_sensor = 'yes' has the wrong type"):

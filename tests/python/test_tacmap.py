@@ -83,6 +83,11 @@ class TestLocalizerDefaults(unittest.TestCase):
                 self.assertGreaterEqual(r.probability_within, 0.0)
                 self.assertLessEqual(r.probability_within, 1.0 + 1e-9)
                 self.assertEqual(len(r.appearance_probability), 2)  # latent by default
+            # Tracking is on by default: the first touch takes the whole grid, and a touch
+            # once localized the tracked path.
+            self.assertEqual(results[0].path, "full (wide support)")
+            after = [r.path for prev, r in zip(results, results[1:]) if prev.verdict == "localized"]
+            self.assertIn("tracked", after)
             final = results[-1]
             error = np.linalg.norm(final.position_mm - truths[-1])
             self.assertLess(error, 5.0, f"sequence {q}: final error {error:.2f} mm")

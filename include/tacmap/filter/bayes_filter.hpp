@@ -116,10 +116,18 @@ enum class update_path {
 ///   log_prediction_support ~ log(Z_in / F_ref + m),
 ///   TV(tracked, full) ~ m max(1, F_ref (1 - m) / Z_in)   (`update_report::tracking_error_bound`)
 /// (both posteriors are proportional on the support; they differ by the outside's share, m in
-/// the tracked one, m F_out / Z in the full one). The whole grid is checked when that estimated
+/// the tracked one, m F_out / Z in the full one). F_ref belongs to another touch, and a touch
+/// after a slip that fits near the old place too was estimated several nats too well supported;
+/// with `sample_every` the touch's own F and Z_out are estimated instead, from the support
+/// (exact) and a sample of rows outside it (each standing for its share of the outside, with
+/// the floor's lambda / N added to its prediction). The whole grid is checked when that estimated
 /// support falls below `doubt` (the touch fits the prediction no better than the map at large:
 /// a kidnap, a slip), and every `recheck_every` tracked touches in any case, which bounds how
-/// long a kidnap that the estimate misses goes unnoticed. `default_tracking()` gives the values
+/// long a kidnap that the estimate misses goes unnoticed. Windowed predicts leave the floor out
+/// (the outside keeps the last whole-grid posterior's values): a whole-grid update that follows
+/// them first puts it back, b <- (1 - lambda) b + lambda / N, as the whole grid's predict would
+/// have, so that a kidnapped sensor's new place starts from the floor as in the untracked
+/// filter (without it, kidnaps found the old place kept). `default_tracking()` gives the values
 /// chosen by measurement for the localizer's default filter.
 struct tracking_params {
   /// Mass left outside the support: 0 turns tracking off (the default); else in (0, 0.5). With
@@ -143,6 +151,13 @@ struct tracking_params {
   /// whole grid is evaluated instead (`update_path::full_contradicted`): the touch fits the
   /// prediction hardly better than the map at large. -infinity: never.
   double doubt = -std::numeric_limits<double>::infinity();
+  /// Each tracked update also evaluates every this many-th row of the belief image (in every
+  /// layer; the rows shift by one each tracked update) outside the support: a sample of the
+  /// whole grid for this very touch. The estimated `log_prediction_support` and the outside's
+  /// share are then taken from it (the sampled states standing for the outside, the support
+  /// exact) instead of from the last whole-grid update's uniform evidence, which belongs to
+  /// another touch. 0: no sample (the last whole-grid update's evidence).
+  int sample_every = 0;
 
   void validate() const {
     if (!(std::isfinite(epsilon) && epsilon >= 0.0 && epsilon < 0.5))
@@ -162,6 +177,9 @@ struct tracking_params {
     if (std::isnan(doubt) || doubt == std::numeric_limits<double>::infinity())
       detail::fail("tracking_params: doubt = ", doubt,
                    "; expected a log Bayes factor (e.g. 1), or -infinity to turn the check off");
+    if (sample_every < 0)
+      detail::fail("tracking_params: sample_every = ", sample_every,
+                   "; expected a row stride >= 0 (e.g. 8; 0 = no sample)");
   }
 };
 
@@ -177,20 +195,21 @@ class contradiction_error : public std::domain_error {
 };
 
 /// Tracking for the localizer's default filter (latent appearance, `robust_motion` with its
-/// floor and wide component): what `localizer` turns on once it is localized. Chosen by
-/// measurement: epsilon 1e-9 as for any real touch; the whole grid whenever the estimated
-/// prediction support falls below 3 nats (a kidnap in the tests: log lambda = -6.9 on the first
-/// touch after it, against 7.6-8.6 while tracking; tacmap-evaluate --scenario realistic
-/// --kidnap-touch 7, 4 maps, seeds 1-2: back below 5 mm within 3 touches in
-/// 145 of 175 kidnapped sequences with 3 or 5 nats, 147 untracked; 1 nat one fewer on seed 1)
-/// and every 16 tracked touches as a backstop
-/// (on the paper's grid at 36 headings a whole-grid touch costs about 13 tracked ones: every 8
-/// made the re-checks 60 % of the cost, 2.3 ms a touch; every 16 about 1.7 ms).
+/// floor and wide component): what `localizer_config::tracking` holds by default. Chosen by
+/// measurement (tacmap-evaluate --scenario realistic --touches 12, the gecko and eight
+/// photographs, seeds 1-3, against --no-tracking in the same run): epsilon 1e-9 as for any
+/// real touch; the whole grid when the estimated prediction support falls below 3 nats (1 and
+/// 5-8 nats recovered fewer kidnaps); a sample of every 8th row, without which slips at touch 7
+/// came back within 5 touches in 356 of 437 sequences against 365 of 432 untracked (every 8th:
+/// 369 of 436; every 16th 368, every 32nd 362); and the whole grid every 64 tracked touches as a
+/// backstop against a kidnap both miss (12-touch sequences never reach it; every 16, the
+/// earlier choice, made the re-checks most of a localized touch's mean cost at 640 x 480).
 [[nodiscard]] constexpr tracking_params default_tracking() {
   tracking_params p;
   p.epsilon = 1e-9;
-  p.recheck_every = 16;
+  p.recheck_every = 64;
   p.doubt = 3.0;
+  p.sample_every = 8;
   return p;
 }
 
@@ -574,18 +593,42 @@ class filter_core {
   std::optional<tracked_region> region_;
   std::vector<grid_box> landed_;         // predict_boxes' windows
   std::vector<state_range> candidates_;  // the region's states (tracked_update)
+  // tracked_update's sample (tracking_params::sample_every): its rows, those outside the
+  // support, and the support and them together (what the model evaluates).
+  std::vector<state_range> sample_rows_, sample_out_, evaluated_;
   static constexpr std::size_t max_region_boxes = 32;
   // Tracking with a uniform floor (see `tracking_params`): the uniform evidence log F_ref of the
   // last whole-grid `update` (NaN before the first), and the tracked updates since.
   double reference_log_uniform_ = std::numeric_limits<double>::quiet_NaN();
   int tracked_run_ = 0;
-  // The mass the states outside a tracked support may hold beyond epsilon: 2 lambda with a
-  // motion floor (`has_uniform_floor`), else 0.
-  [[nodiscard]] double floor_allowance() const {
+  // The motion's uniform floor lambda (`has_uniform_floor`), else 0.
+  [[nodiscard]] double uniform_floor() const {
     if constexpr (has_uniform_floor<Motion>)
-      return 2.0 * static_cast<double>(motion_.uniform_floor());
+      return static_cast<double>(motion_.uniform_floor());
     else
       return 0.0;
+  }
+  // The mass the states outside a tracked support may hold beyond epsilon: 2 lambda with a
+  // motion floor, else 0.
+  [[nodiscard]] double floor_allowance() const { return 2.0 * uniform_floor(); }
+  // Before a whole-grid update that follows windowed predicts: the floor those predicts left
+  // out, b <- (1 - lambda) b + lambda / N, as the whole grid's predict would have put it. The
+  // states outside the tracked boxes otherwise still hold the last whole-grid posterior's
+  // values (the touches before, which a kidnapped sensor's new place did not fit), not the
+  // fresh lambda / N that lets the untracked filter find the new place at once.
+  // The belief before it stays in scratch_ until the update writes there, which it does only
+  // once nothing can fail (its checks come first, and with the floor on every state the
+  // posterior's sum is positive): `unrestore_floor` puts it back after a failed update.
+  void restore_floor() {
+    const double lambda = uniform_floor();
+    scratch_ = belief_ * static_cast<scalar_type>(1.0 - lambda) +
+               static_cast<scalar_type>(lambda / static_cast<double>(grid_.size()));
+    changed_all();
+    belief_.swap(scratch_);
+  }
+  void unrestore_floor() {
+    changed_all();
+    belief_.swap(scratch_);
   }
   [[nodiscard]] Eigen::Index layers() const { return grid_.size() / (grid_.rows() * grid_.cols()); }
   // The cells of the belief image (every layer) changed since the last save_state (what the
@@ -840,12 +883,26 @@ update_path filter_core<Grid, Motion>::tracked_update(double bound, evaluate_on 
     s = detail::support_ranges(belief_.data(), n, t, max_states, support_);
   }
   if (s.too_wide) return update_path::full_wide;
-  // With a floor, the outside's share is estimated against the last whole-grid update: none
-  // yet (a prior set by the user), the whole grid.
-  if (allowance > 0.0 && !std::isfinite(reference_log_uniform_))
+  const bool sampling = tracking_.sample_every > 0;
+  // With a floor and no sample, the outside's share is estimated against the last whole-grid
+  // update: none yet (a prior set by the user), the whole grid.
+  if (allowance > 0.0 && !sampling && !std::isfinite(reference_log_uniform_))
     return update_path::full_contradicted;
   const std::span<const state_range> in(support_);
-  evaluate.run(evaluate.context, log_likelihood_, in);
+  std::span<const state_range> sampled;
+  if (sampling) {
+    // The sample's rows outside S, evaluated with S in one call (the model prepares the touch
+    // once). The rows shift each tracked update, so that a narrow peak missed by one is met
+    // by the next.
+    detail::sample_rows(grid_.rows(), grid_.cols(), layers(), tracking_.sample_every,
+                        static_cast<Eigen::Index>(tracked_run_), sample_rows_);
+    detail::ranges_minus(std::span<const state_range>(sample_rows_), in, sample_out_);
+    sampled = std::span<const state_range>(sample_out_);
+    detail::ranges_union(in, sampled, evaluated_);
+    evaluate.run(evaluate.context, log_likelihood_, std::span<const state_range>(evaluated_));
+  } else {
+    evaluate.run(evaluate.context, log_likelihood_, in);
+  }
   // The NaN and +infinity guards of apply_log_likelihood, on the states evaluated.
   scalar_type top = -std::numeric_limits<scalar_type>::infinity();
   for (const state_range& r : in) {
@@ -894,7 +951,67 @@ update_path filter_core<Grid, Motion>::tracked_update(double bound, evaluate_on 
   const double log_inside = static_cast<double>(top) + std::log(sums.posterior);
   double estimated_support = std::numeric_limits<double>::quiet_NaN();
   double floor_error = 0.0;
-  if (std::isfinite(reference_log_uniform_)) {
+  Eigen::Index sample_states = 0;
+  for (const state_range& r : sampled) sample_states += r.end - r.begin;
+  if (sample_states > 0) {
+    // This touch's evidence outside S from the sample: each sampled state stands for
+    // (N - |S|) / |sample| of the outside. Z_out ~ that times sum bel_bar p over the sample,
+    // the uniform evidence F ~ (sum_S p + that times sum p over the sample) / N; then
+    //   log_prediction_support ~ log((Z_in + Z_out) / F),  outside share ~ Z_out / (Z_in + Z_out)
+    // (the full update's own figures, up to the sample's error).
+    scalar_type sample_top = -std::numeric_limits<scalar_type>::infinity();
+    for (const state_range& r : sampled) {
+      const auto scan =
+          detail::scan_log_likelihood(log_likelihood_.data() + r.begin, r.end - r.begin);
+      if (scan.first_nan >= 0)
+        detail::fail<std::domain_error>(
+            "bayes_filter::update: the measurement model is NaN at state ",
+            r.begin + scan.first_nan,
+            "; expected finite log-likelihoods (or -infinity for excluded states). The belief is "
+            "unchanged");
+      sample_top = std::max(sample_top, scan.max);
+    }
+    if (sample_top == std::numeric_limits<scalar_type>::infinity())
+      detail::fail<std::domain_error>(
+          "bayes_filter::update: the measurement model contains +infinity; expected finite "
+          "log-likelihoods. The belief is unchanged");
+    double log_outside = -std::numeric_limits<double>::infinity();  // log Z_out
+    double log_uniform_outside = -std::numeric_limits<double>::infinity();
+    if (sample_top > -std::numeric_limits<scalar_type>::infinity()) {
+      detail::weight_sums w;
+      for (const state_range& r : sampled) {
+        const detail::weight_sums k =
+            detail::weight_by_likelihood(belief_.data() + r.begin, log_likelihood_.data() + r.begin,
+                                         sample_top, scratch_.data() + r.begin, r.end - r.begin);
+        w.posterior += k.posterior;
+        w.likelihood += k.likelihood;
+      }
+      const double log_scale = std::log(static_cast<double>(n - s.states)) -
+                               std::log(static_cast<double>(sample_states));
+      const auto top_p = static_cast<double>(sample_top);
+      // The outside's prediction as the whole grid's predict gives it: its values (what the
+      // last whole-grid update left, moved or not) and the floor's lambda / N on every state,
+      // which windowed predicts leave out (restore_floor).
+      const double lambda = uniform_floor();
+      const double weighted =
+          (1.0 - lambda) * w.posterior + lambda / static_cast<double>(n) * w.likelihood;
+      if (weighted > 0.0) log_outside = log_scale + top_p + std::log(weighted);
+      log_uniform_outside = log_scale + top_p + std::log(w.likelihood);
+    }
+    const auto log_add = [](double a, double b) {
+      const double hi = std::max(a, b), lo = std::min(a, b);
+      return hi == -std::numeric_limits<double>::infinity() ? hi
+                                                            : hi + std::log1p(std::exp(lo - hi));
+    };
+    const double log_uniform =
+        log_add(static_cast<double>(top) + std::log(sums.likelihood), log_uniform_outside) -
+        std::log(static_cast<double>(n));
+    const double log_total = log_add(log_inside, log_outside);
+    estimated_support = log_total - log_uniform;
+    const double share = std::exp(log_outside - log_total);
+    if (!(estimated_support >= tracking_.doubt)) return update_path::full_contradicted;
+    floor_error = std::max(outside, share);
+  } else if (std::isfinite(reference_log_uniform_)) {
     const double ratio = std::exp(log_inside - reference_log_uniform_);  // Z_in / F_ref
     estimated_support = std::log(ratio + outside);
     if (!(estimated_support >= tracking_.doubt)) return update_path::full_contradicted;
@@ -1062,7 +1179,17 @@ update_report bayes_filter<Grid, Motion, Measurement>::update(const measurement_
       }
     }
   }
-  update_report report = update_full(z);
+  // After windowed predicts, the floor they left out (see restore_floor).
+  const bool floor_left_out =
+      tracking_.epsilon > 0.0 && region && region->moved && this->uniform_floor() > 0.0;
+  if (floor_left_out) this->restore_floor();
+  update_report report;
+  try {
+    report = update_full(z);
+  } catch (...) {
+    if (floor_left_out) this->unrestore_floor();
+    throw;
+  }
   report.path = fallback;
   // The reference for the tracked updates that follow: log (1/N) sum_x p(z | x).
   reference_log_uniform_ = report.log_marginal_likelihood() - report.log_prediction_support;

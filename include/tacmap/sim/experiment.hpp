@@ -427,11 +427,11 @@ class basic_localization_experiment {
     if (config_.headings == 0) {
       v.filter.emplace(
           make_planar_filter(measurement_, config_, v.visual_map, protocol_->mm_per_px, window_));
-      if (config_.tracking) v.filter->set_tracking(*config_.tracking);
+      if (const auto t = config_.tracking_for_filter()) v.filter->set_tracking(*t);
     } else if constexpr (localizes_headings<Measurement>) {
       v.pose_filter.emplace(
           make_pose_filter(measurement_, config_, v.visual_map, protocol_->mm_per_px, window_));
-      if (config_.tracking) v.pose_filter->set_tracking(*config_.tracking);
+      if (const auto t = config_.tracking_for_filter()) v.pose_filter->set_tracking(*t);
     } else {
       detail::fail("localization_experiment: headings = ", config_.headings,
                    ", but the measurement policy has no (x, y, theta) model; use headings = 0");

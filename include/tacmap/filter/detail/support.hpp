@@ -213,6 +213,55 @@ support_summary support_ranges_on(const T* p, std::span<const state_range> range
   return s;
 }
 
+// --- The sample of the whole grid a tracked update checks its doubt against ---
+
+/// Every `every`-th row of the belief image from row `offset` (mod `every`), in every one of its
+/// `layers`: whole rows, so that a model that streams tiles of a row pays for the sampled states
+/// only. Sorted, disjoint, into `out`.
+inline void sample_rows(Eigen::Index rows, Eigen::Index cols, Eigen::Index layers,
+                        Eigen::Index every, Eigen::Index offset, std::vector<state_range>& out) {
+  out.clear();
+  if (every <= 0 || rows <= 0 || cols <= 0) return;
+  const Eigen::Index first = ((offset % every) + every) % every;
+  for (Eigen::Index a = 0; a < layers; ++a)
+    for (Eigen::Index r = first; r < rows; r += every) {
+      const Eigen::Index begin = (a * rows + r) * cols;
+      out.push_back({begin, begin + cols});
+    }
+}
+
+/// The states of `a` not in `b` (both sorted and disjoint), sorted and disjoint, into `out`.
+inline void ranges_minus(std::span<const state_range> a, std::span<const state_range> b,
+                         std::vector<state_range>& out) {
+  out.clear();
+  std::size_t j = 0;
+  for (state_range r : a) {
+    while (j < b.size() && b[j].end <= r.begin) ++j;
+    Eigen::Index at = r.begin;
+    for (std::size_t k = j; k < b.size() && b[k].begin < r.end; ++k) {
+      if (b[k].begin > at) out.push_back({at, b[k].begin});
+      at = std::max(at, b[k].end);
+    }
+    if (at < r.end) out.push_back({at, r.end});
+  }
+}
+
+/// The union of two disjoint sets of sorted, disjoint ranges (touching ranges joined), into
+/// `out`.
+inline void ranges_union(std::span<const state_range> a, std::span<const state_range> b,
+                         std::vector<state_range>& out) {
+  out.clear();
+  std::size_t i = 0, j = 0;
+  while (i < a.size() || j < b.size()) {
+    const state_range r =
+        j == b.size() || (i < a.size() && a[i].begin < b[j].begin) ? a[i++] : b[j++];
+    if (!out.empty() && out.back().end >= r.begin)
+      out.back().end = std::max(out.back().end, r.end);
+    else
+      out.push_back(r);
+  }
+}
+
 // --- The region a tracked belief's mass is in (boxes on the belief image, every layer) ---
 
 /// Boxes `a` and `b` overlap once each is grown by `gap` cells on every side.
