@@ -193,7 +193,8 @@ template <localizer_measurement M>
     for (std::size_t k = begin; k < end; ++k) {
       try {
         prepared[k].emplace(
-            measurement.planar(config, detail::map_as_sensor_sees(config, resampled[k], scale),
+            measurement.planar(config,
+                               detail::map_as_sensor_sees(config, resampled[k], scale, sensor),
                                windows[k]),
             appearances);
       } catch (const std::invalid_argument& e) {

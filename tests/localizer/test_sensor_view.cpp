@@ -111,7 +111,19 @@ TEST_CASE("pad_spread_mm: the localizer describes the map blurred by it, in mill
     static_cast<void>(loc.touch(second, tacmap::odometry{.dx_mm = 6.0, .dy_mm = -3.0}));
     return loc.belief();
   };
-  CHECK(tacmap::localizer_config{}.pad_spread_mm == 1.7);  // the default: half the pitch
+  // The default: half the sensor's pitch, 1.7 mm for the paper's array.
+  CHECK(!tacmap::localizer_config{}.pad_spread_mm);
+  CHECK(tacmap::localizer_config{}.pad_spread(tacmap::taxel_geometry{}) == doctest::Approx(1.7));
+  CHECK(tacmap::localizer_config{}.pad_spread({.rows = 8, .cols = 8, .pitch_mm = 2.0}) ==
+        doctest::Approx(1.0));
+  {  // ... which is what an empty setting does
+    tacmap::localizer_config told;
+    told.pad_spread_mm = 1.7;
+    tacmap::localizer explicit_spread(map, mm_per_px, told), defaulted(map, mm_per_px);
+    static_cast<void>(explicit_spread.touch(first));
+    static_cast<void>(defaulted.touch(first));
+    CHECK(max_abs_difference(explicit_spread.belief(), defaulted.belief()) == 0.0);
+  }
   for (const double spread : {1.7, 3.4}) {
     CAPTURE(spread);
     // The blur is the map's, sigma = spread / mm_per_px pixels: a localizer given that map
@@ -155,7 +167,8 @@ TEST_CASE("pad_spread_mm: a spread that is not a spread is refused, naming it") 
     CHECK_THROWS_WITH_AS(c.validate(), doctest::Contains("pad_spread_mm = "),
                          std::invalid_argument);
     CHECK_THROWS_WITH_AS(static_cast<void>(tacmap::localizer(map, mm_per_px, c)),
-                         doctest::Contains("half the sensor's pitch"), std::invalid_argument);
+                         doctest::Contains("leave it empty for half the sensor's pitch"),
+                         std::invalid_argument);
   }
   // In range in mm, but thousands of pixels on a map of 0.05 mm per px: refused with the
   // scale named, before any work.
@@ -166,7 +179,7 @@ TEST_CASE("pad_spread_mm: a spread that is not a spread is refused, naming it") 
   fine(0, 0) = 1.0F;
   CHECK_THROWS_WITH_AS(
       static_cast<void>(tacmap::localizer(fine, 0.05, wide)),
-      doctest::Contains("pad_spread_mm = 100 is 2000 px on a map of 0.05 mm per px"),
+      doctest::Contains("(pad_spread_mm) 100 mm is 2000 px on a map of 0.05 mm per px"),
       std::invalid_argument);
 }
 
