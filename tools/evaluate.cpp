@@ -555,6 +555,12 @@ int main(int argc, char** argv) try {
                  "of --wide-sigma (robust_motion; comma-separated to compare; default 0.1)")
       ->delimiter(',')
       ->check(CLI::Range(0.0, 0.999));
+  double pad_spread = -1.0;  // not given: the localizer's default, half the sensor's pitch
+  app.add_option("--pad-spread", pad_spread,
+                 "the map as the sensor sees it: blurred by this Gaussian sigma, mm, before it is "
+                 "described (localizer_config::pad_spread_mm; default: half the sensor's pitch, "
+                 "1.7; 0 = the map as photographed)")
+      ->check(CLI::Range(0.0, tacmap::detail::max_pad_spread_mm));
   app.add_option("--wide-sigma", wide_sigma, "the wide component's spread, mm per axis (3)")
       ->check(CLI::Range(0.01, 100.0));
   std::vector<double> broad_probabilities;
@@ -966,6 +972,8 @@ int main(int argc, char** argv) try {
     configs = std::move(expanded);
   }
   for (auto& c : configs) c.wide_sigma_mm = wide_sigma;
+  if (pad_spread >= 0.0)
+    for (auto& c : configs) c.pad_spread_mm = pad_spread;
   expand(wide_probabilities,
          [](tacmap::localization_config& c, double v) { c.wide_probability = v; });
   for (auto& c : configs) c.broad_sigma_mm = broad_sigma;

@@ -45,6 +45,9 @@ template <class Exception = std::invalid_argument, class... Parts>
   throw Exception(out.str());
 }
 
+/// The widest blur `gaussian_blurred` takes, px: its taps reach 3 sigma, 6001 per pass.
+inline constexpr double max_blur_px = 1000.0;
+
 /// True when every element of the array is finite (no NaN, no infinity).
 template <class Derived>
 bool all_finite(const Eigen::DenseBase<Derived>& values) {
@@ -159,6 +162,41 @@ namespace detail {
   return detail::resize_area_by(src, rows, cols,
                                 static_cast<double>(src.rows()) / static_cast<double>(rows),
                                 static_cast<double>(src.cols()) / static_cast<double>(cols));
+}
+
+/// `src` blurred by a Gaussian of standard deviation `sigma_px` pixels (separable; taps to
+/// 3 sigma). Taps falling outside the image are dropped and the rest renormalised, so a constant
+/// image stays constant up to its border. `sigma_px` 0 returns a copy. Throws
+/// std::invalid_argument for a `sigma_px` that is not in [0, `detail::max_blur_px`].
+[[nodiscard]] inline image<float> gaussian_blurred(const image<float>& src, double sigma_px) {
+  if (!(sigma_px >= 0.0 && sigma_px <= detail::max_blur_px))
+    detail::fail("gaussian_blurred: sigma_px = ", sigma_px,
+                 "; expected a standard deviation in [0, ", detail::max_blur_px,
+                 "] pixels (0: no blur)");
+  const auto radius = static_cast<Eigen::Index>(std::ceil(3.0 * sigma_px));
+  if (radius == 0 || src.size() == 0) return src;
+  std::vector<double> taps(static_cast<std::size_t>(2 * radius + 1));
+  for (Eigen::Index o = -radius; o <= radius; ++o)
+    taps[static_cast<std::size_t>(o + radius)] =
+        std::exp(-0.5 * static_cast<double>(o * o) / (sigma_px * sigma_px));
+  const auto pass = [&](const image<float>& in, bool along_rows) {
+    image<float> out(in.rows(), in.cols());
+    const Eigen::Index n = along_rows ? in.cols() : in.rows();
+    for (Eigen::Index r = 0; r < in.rows(); ++r)
+      for (Eigen::Index c = 0; c < in.cols(); ++c) {
+        const Eigen::Index at = along_rows ? c : r;
+        double sum = 0.0, weight = 0.0;
+        for (Eigen::Index k = std::max<Eigen::Index>(0, at - radius);
+             k <= std::min<Eigen::Index>(n - 1, at + radius); ++k) {
+          const double w = taps[static_cast<std::size_t>(k - at + radius)];
+          sum += w * static_cast<double>(along_rows ? in(r, k) : in(k, c));
+          weight += w;
+        }
+        out(r, c) = static_cast<float>(sum / weight);
+      }
+    return out;
+  };
+  return pass(pass(src, true), false);
 }
 
 /// `src`, sampled at `from_mm_per_px`, resampled to `to_mm_per_px` so that it covers the same

@@ -194,7 +194,11 @@ template <localizer_measurement M>
   executor.parallel_for(maps.size(), [&](std::size_t begin, std::size_t end) {
     for (std::size_t k = begin; k < end; ++k) {
       try {
-        prepared[k].emplace(measurement.planar(config, resampled[k], windows[k]), appearances);
+        prepared[k].emplace(
+            measurement.planar(config,
+                               detail::map_as_sensor_sees(config, resampled[k], scale, sensor),
+                               windows[k]),
+            appearances);
       } catch (const std::invalid_argument& e) {
         detail::fail("library: '", maps[k].name, "' at the library's scale (", scale,
                      " mm per px, the sensor's window ", windows[k].width, " x ", windows[k].height,

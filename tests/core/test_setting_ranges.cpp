@@ -177,6 +177,9 @@ TEST_CASE("localizer_config::validate refuses each degenerate setting up front, 
       "localizer_config: turn_sigma_rad = 1e-300", "in [1e-06, 1000000] rad");
   refused([](auto& c) { c.wide_sigma_mm = 1e-300; }, "wide_sigma_mm = 1e-300",
           "in [0.001, 100] mm");
+  refused([](auto& c) { c.pad_spread_mm = -1e-9; }, "localizer_config: pad_spread_mm = -1e-09",
+          "in [0, 100] mm");
+  refused([](auto& c) { c.pad_spread_mm = nan_value; }, "pad_spread_mm = nan", "in [0, 100] mm");
   refused(
       [](auto& c) {
         c.broad_probability = 0.05;
@@ -235,6 +238,14 @@ TEST_CASE("at the edges of every range a localizer's touches stay finite and nor
     c.broad_sigma_mm = 1000.0;
     c.confidence.radius_mm = 1e300;  // the disc covers the grid (was an integer overflow)
     touch_three_times(c);
+  }
+  SUBCASE("the map as photographed and blurred by the widest sensor spread, 100 mm") {
+    for (const double spread : {0.0, 100.0}) {
+      CAPTURE(spread);
+      auto c = base;
+      c.pad_spread_mm = spread;
+      touch_three_times(c);
+    }
   }
   SUBCASE("unknown heading at the smallest and largest turn noise") {
     for (const double sigma : {1e-6, 1e6}) {

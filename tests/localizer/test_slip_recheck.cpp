@@ -82,13 +82,17 @@ TEST_CASE("an unflagged slip leaves no 'localized' claim on the old place at the
   // Slips of 20 mm in eight directions after two sequences. Without the recheck the floor alone
   // (lost_probability) gives the slipped place too little mass, and the localizer goes on
   // claiming the old place (measured: once in 13 slips); the recheck must leave no such claim.
-  // Both untracked: what the recheck adds to the floor alone on the whole grid. (The default
-  // tracks: its sampled doubt takes the slipped touch to the whole grid, measured with no stale
-  // claim here either.)
+  // Both untracked and on the map as photographed (pad_spread_mm = 0): what the recheck adds
+  // to the floor alone on the whole grid. The defaults leave no stale claim in these 13 slips
+  // without the recheck either (tracking's sampled doubt takes the slipped touch to the whole
+  // grid; the map described as the sensor sees it, 1.7 mm), so the case would show nothing of
+  // what the recheck does.
   auto without = fast_config();
+  without.pad_spread_mm = 0.0;
   without.slip_recheck.reset();  // the default: off
   without.tracking.reset();
   auto with = fast_config();
+  with.pad_spread_mm = 0.0;
   with.slip_recheck = tacmap::slip_recheck_params{};
   with.tracking.reset();
   int slips = 0, stale_without = 0, stale_with = 0, wrong_with = 0;

@@ -40,6 +40,11 @@ inline constexpr double max_tempering = 1e3;
 inline constexpr double min_epsilon = 1e-30;
 inline constexpr double max_epsilon = 1e30;
 
+/// The sensor's spread on the map (localizer_config::pad_spread_mm), mm: 0 (none) to 100 mm, a
+/// blur wider than any tactile array; its size in map pixels is checked where the map's scale
+/// is known (`gaussian_blurred`: at most 1000 px).
+inline constexpr double max_pad_spread_mm = 100.0;
+
 /// A map's scale, mm per pixel: from a nanometre per pixel (an electron micrograph) to a metre
 /// (an aerial photograph). The grids' lattice step is this scale, and the motion models turn a
 /// spread in mm into whole states (sigma / step, an Eigen::Index): with every spread <= 1e6 mm

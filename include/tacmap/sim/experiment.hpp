@@ -425,12 +425,13 @@ class basic_localization_experiment {
     v.pressed_relief = margin_px_ > 0 ? padded(v.relief, margin_px_) : v.relief;
     // The filter a `localizer` with this configuration runs on this map.
     if (config_.headings == 0) {
-      v.filter.emplace(
-          make_planar_filter(measurement_, config_, v.visual_map, protocol_->mm_per_px, window_));
+      v.filter.emplace(make_planar_filter(measurement_, config_, v.visual_map, protocol_->mm_per_px,
+                                          window_, config_.simulator.geometry));
       if (const auto t = config_.tracking_for_filter()) v.filter->set_tracking(*t);
     } else if constexpr (localizes_headings<Measurement>) {
-      v.pose_filter.emplace(
-          make_pose_filter(measurement_, config_, v.visual_map, protocol_->mm_per_px, window_));
+      v.pose_filter.emplace(make_pose_filter(measurement_, config_, v.visual_map,
+                                             protocol_->mm_per_px, window_,
+                                             config_.simulator.geometry));
       if (const auto t = config_.tracking_for_filter()) v.pose_filter->set_tracking(*t);
     } else {
       detail::fail("localization_experiment: headings = ", config_.headings,

@@ -268,10 +268,12 @@ class library_experiment {
     if (!single_[other]) {
       const pixel_size window = checked_tactile_window(config_.simulator.geometry, p.mm_per_px,
                                                        p.map_size(), "library_experiment");
-      single_[other].emplace(make_planar_filter(config_, visual_map(other), p.mm_per_px, window));
+      single_[other].emplace(make_planar_filter(config_, visual_map(other), p.mm_per_px, window,
+                                                config_.simulator.geometry));
       if (shadowed())
-        single_shadow_[other].emplace(make_planar_filter(
-            config_, visual_map(other).rowwise().reverse().eval(), p.mm_per_px, window));
+        single_shadow_[other].emplace(
+            make_planar_filter(config_, visual_map(other).rowwise().reverse().eval(), p.mm_per_px,
+                               window, config_.simulator.geometry));
     }
     sequence_result single = experiments_[object]->run(sequence, true);
     library_sequence_result out = start(object, sequence, single);
