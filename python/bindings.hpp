@@ -238,7 +238,8 @@ inline std::vector<std::string> localizer_config_fields() {
           "calibrate_sensor",
           "tracking",
           "tracking_headings",
-          "working_mm_per_px"};
+          "working_mm_per_px",
+          "pad_spread_mm"};
 }
 
 /// A read-write property `name` of `Class` for an optional parameter struct `P` (a bound

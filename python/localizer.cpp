@@ -370,6 +370,14 @@ void bind_config(py::module_& m) {
                      "pixels; positions stay in the photograph's millimetres. None: the sensor's "
                      "pitch / 3 (LocalizerConfig.default_px_per_taxel). A coarser photograph is "
                      "used as it is, with a warning (Localizer.warnings).")
+      .def_readwrite("pad_spread_mm", &localizer_config::pad_spread_mm,
+                     "The map as the sensor sees it: the standard deviation, mm, of a Gaussian "
+                     "by which the map is blurred before it is described (a touch shows nothing "
+                     "finer than a taxel's cell). None: half the sensor's pitch "
+                     "(LocalizerConfig.default_pad_spread_pitches); 0: the map as photographed "
+                     "(LocalizerConfig.paper()).")
+      .def_readonly_static("default_pad_spread_pitches",
+                           &localizer_config::default_pad_spread_pitches)
       .def_readonly_static("default_px_per_taxel", &localizer_config::default_px_per_taxel)
       .def_readonly_static("min_px_per_taxel", &localizer_config::min_px_per_taxel)
       .def_readonly_static("default_appearance_switch",

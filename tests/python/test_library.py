@@ -425,7 +425,7 @@ class TestConfigurationParts(unittest.TestCase):
 
     def test_optional_parts_take_none_true_or_parameters(self):
         cfg = tacmap.LocalizerConfig()
-        for name in ("calibrate_sensor", "slip_recheck", "working_mm_per_px"):
+        for name in ("calibrate_sensor", "slip_recheck", "working_mm_per_px", "pad_spread_mm"):
             self.assertIsNone(getattr(cfg, name), name)
             self.assertIn(name + "=None", repr(cfg))
             self.assertIn(name + " = None", tacmap.LocalizerConfig.__doc__)
@@ -445,6 +445,10 @@ class TestConfigurationParts(unittest.TestCase):
         self.assertEqual((cfg.slip_recheck.doubt, cfg.slip_recheck.broad_probability),
                          (-1.0, 0.3))
         self.assertEqual(cfg.working_mm_per_px, 0.5)
+        # The map as the sensor sees it: None is half the pitch; paper() matches the photograph.
+        self.assertEqual(tacmap.LocalizerConfig.default_pad_spread_pitches, 0.5)
+        self.assertEqual(tacmap.LocalizerConfig.paper().pad_spread_mm, 0.0)
+        self.assertEqual(tacmap.LocalizerConfig(pad_spread_mm=1.2).pad_spread_mm, 1.2)
         self.assertEqual(cfg.burst.statistic, "trimmed_mean")
         # Nested parameters are views into the configuration, as preprocessing is.
         cfg.calibrate_sensor.window = 16
@@ -481,6 +485,8 @@ class TestConfigurationParts(unittest.TestCase):
             tacmap.LocalizerConfig(working_mm_per_px=math.nan)
         with self.assertRaisesRegex(ValueError, "working_mm_per_px = -1"):
             tacmap.LocalizerConfig(working_mm_per_px=-1.0)
+        with self.assertRaisesRegex(ValueError, "pad_spread_mm = -1"):
+            tacmap.LocalizerConfig(pad_spread_mm=-1.0)
         # Validated as a whole: a recheck's share with the motion's must stay below 1.
         with self.assertRaisesRegex(ValueError, "slip_recheck.broad_probability = 0.95"):
             tacmap.LocalizerConfig(slip_recheck=tacmap.SlipRecheckParams(broad_probability=0.95))
