@@ -164,6 +164,50 @@ namespace detail {
                                 static_cast<double>(src.cols()) / static_cast<double>(cols));
 }
 
+namespace detail {
+/// 1-D Gaussian taps for `sigma` (in samples), truncated at 3 sigma; one tap for 0. Not
+/// normalised: `gaussian_blur` divides by the taps that fall inside the image, pixel by pixel.
+inline std::vector<double> gaussian_taps(double sigma) {
+  if (!(sigma > 0.0)) return {1.0};
+  const auto radius = static_cast<int>(std::ceil(3.0 * sigma));
+  std::vector<double> taps(static_cast<std::size_t>(2 * radius + 1));
+  for (int o = -radius; o <= radius; ++o)
+    taps[static_cast<std::size_t>(o + radius)] =
+        std::exp(-0.5 * static_cast<double>(o * o) / (sigma * sigma));
+  return taps;
+}
+
+/// Separable Gaussian blur of `values` in place (`sigma` in pixels, unchecked). Taps falling
+/// outside the image are dropped and the rest renormalised, so a constant image stays constant
+/// (no darkening at the border) and a value farther than 3 sigma from any load stays exactly 0.
+inline void gaussian_blur(image<float>& values, double sigma) {
+  const std::vector<double> taps = gaussian_taps(sigma);
+  if (taps.size() == 1) return;
+  const auto radius = static_cast<Eigen::Index>(taps.size() / 2);
+  const auto pass = [&](const image<float>& in, bool along_rows) {
+    image<float> out(in.rows(), in.cols());
+    const Eigen::Index n = along_rows ? in.cols() : in.rows();
+    for (Eigen::Index r = 0; r < in.rows(); ++r)
+      for (Eigen::Index c = 0; c < in.cols(); ++c) {
+        const Eigen::Index at = along_rows ? c : r;
+        double sum = 0.0;
+        double weight = 0.0;
+        for (Eigen::Index o = -radius; o <= radius; ++o) {
+          const Eigen::Index k = at + o;
+          if (k < 0 || k >= n) continue;
+          const double w = taps[static_cast<std::size_t>(o + radius)];
+          sum += w * static_cast<double>(along_rows ? in(r, k) : in(k, c));
+          weight += w;
+        }
+        out(r, c) = static_cast<float>(sum / weight);
+      }
+    return out;
+  };
+  values = pass(values, true);
+  values = pass(values, false);
+}
+}  // namespace detail
+
 /// `src` blurred by a Gaussian of standard deviation `sigma_px` pixels (separable; taps to
 /// 3 sigma). Taps falling outside the image are dropped and the rest renormalised, so a constant
 /// image stays constant up to its border. `sigma_px` 0 returns a copy. Throws
@@ -173,30 +217,9 @@ namespace detail {
     detail::fail("gaussian_blurred: sigma_px = ", sigma_px,
                  "; expected a standard deviation in [0, ", detail::max_blur_px,
                  "] pixels (0: no blur)");
-  const auto radius = static_cast<Eigen::Index>(std::ceil(3.0 * sigma_px));
-  if (radius == 0 || src.size() == 0) return src;
-  std::vector<double> taps(static_cast<std::size_t>(2 * radius + 1));
-  for (Eigen::Index o = -radius; o <= radius; ++o)
-    taps[static_cast<std::size_t>(o + radius)] =
-        std::exp(-0.5 * static_cast<double>(o * o) / (sigma_px * sigma_px));
-  const auto pass = [&](const image<float>& in, bool along_rows) {
-    image<float> out(in.rows(), in.cols());
-    const Eigen::Index n = along_rows ? in.cols() : in.rows();
-    for (Eigen::Index r = 0; r < in.rows(); ++r)
-      for (Eigen::Index c = 0; c < in.cols(); ++c) {
-        const Eigen::Index at = along_rows ? c : r;
-        double sum = 0.0, weight = 0.0;
-        for (Eigen::Index k = std::max<Eigen::Index>(0, at - radius);
-             k <= std::min<Eigen::Index>(n - 1, at + radius); ++k) {
-          const double w = taps[static_cast<std::size_t>(k - at + radius)];
-          sum += w * static_cast<double>(along_rows ? in(r, k) : in(k, c));
-          weight += w;
-        }
-        out(r, c) = static_cast<float>(sum / weight);
-      }
-    return out;
-  };
-  return pass(pass(src, true), false);
+  image<float> out = src;
+  detail::gaussian_blur(out, sigma_px);
+  return out;
 }
 
 /// `src`, sampled at `from_mm_per_px`, resampled to `to_mm_per_px` so that it covers the same

@@ -132,46 +132,9 @@ inline std::pair<Eigen::Index, Eigen::Index> first_non_finite(const image<float>
   return {-1, -1};
 }
 
-/// Normalised 1-D Gaussian taps for `sigma` (in samples), truncated at 3 sigma; one tap for 0.
-inline std::vector<double> gaussian_taps(double sigma) {
-  if (!(sigma > 0.0)) return {1.0};
-  const auto radius = static_cast<int>(std::ceil(3.0 * sigma));
-  std::vector<double> taps(static_cast<std::size_t>(2 * radius + 1));
-  for (int o = -radius; o <= radius; ++o)
-    taps[static_cast<std::size_t>(o + radius)] =
-        std::exp(-0.5 * static_cast<double>(o * o) / (sigma * sigma));
-  return taps;
-}
-
-/// Separable Gaussian blur in place. Taps falling outside the image are dropped and the rest
-/// renormalised, so a constant image stays constant (no darkening at the border) and a value
-/// farther than 3 sigma from any load stays exactly 0.
-inline void gaussian_blur(image<float>& values, double sigma) {
-  const std::vector<double> taps = gaussian_taps(sigma);
-  if (taps.size() == 1) return;
-  const auto radius = static_cast<Eigen::Index>(taps.size() / 2);
-  const auto pass = [&](const image<float>& in, bool along_rows) {
-    image<float> out(in.rows(), in.cols());
-    const Eigen::Index n = along_rows ? in.cols() : in.rows();
-    for (Eigen::Index r = 0; r < in.rows(); ++r)
-      for (Eigen::Index c = 0; c < in.cols(); ++c) {
-        const Eigen::Index at = along_rows ? c : r;
-        double sum = 0.0;
-        double weight = 0.0;
-        for (Eigen::Index o = -radius; o <= radius; ++o) {
-          const Eigen::Index k = at + o;
-          if (k < 0 || k >= n) continue;
-          const double w = taps[static_cast<std::size_t>(o + radius)];
-          sum += w * static_cast<double>(along_rows ? in(r, k) : in(k, c));
-          weight += w;
-        }
-        out(r, c) = static_cast<float>(sum / weight);
-      }
-    return out;
-  };
-  values = pass(values, true);
-  values = pass(values, false);
-}
+// The separable Gaussian blur (tacmap/image.hpp) the simulator's relief, load and scenes use.
+using tacmap::detail::gaussian_blur;
+using tacmap::detail::gaussian_taps;
 
 }  // namespace detail::simulation
 
