@@ -334,7 +334,7 @@ struct localizer_config {
     c.lost_probability = 0.0;
     c.wide_probability = 0.0;
     c.broad_probability = 0.0;
-    c.tracking.reset();  // the paper evaluated the whole grid at every touch
+    c.tracking.reset();     // the paper evaluated the whole grid at every touch
     c.pad_spread_mm = 0.0;  // the paper described the map as photographed
     return c;
   }
