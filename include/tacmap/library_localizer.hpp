@@ -350,18 +350,11 @@ class basic_library_localizer {
                    " rad is not finite; expected finite millimetres and radians — the position "
                    "source delivered an invalid sample");
     std::optional<odometry> moved;
-    if (last_pose_) {
-      const double dx = where.x_mm - last_pose_->x_mm, dy = where.y_mm - last_pose_->y_mm;
-      detail::check_arm_motion(*last_pose_, where, dx, dy);
-      const double turn = pose_grid<float>::wrap_angle(where.theta_rad - last_pose_->theta_rad);
-      if (std::abs(turn) > 5.0 * std::numbers::pi / 180.0)
-        detail::fail("library_localizer::touch_at: the arm's yaw changed by ",
-                     turn * 180.0 / std::numbers::pi,
-                     " degrees since the previous touch, but a library is localized with a "
-                     "known, fixed heading; keep the sensor's yaw within 5 degrees between "
-                     "touches");
-      moved = odometry{.dx_mm = dx, .dy_mm = dy};
-    }
+    if (last_pose_)
+      moved = detail::known_heading_arm_motion(
+          *last_pose_, where, "library_localizer::touch_at",
+          "a library is localized with a known, fixed heading; keep the sensor's yaw within 5 "
+          "degrees between touches");
     library_touch_result r = step(frame, moved);
     last_pose_ = where;
     return r;

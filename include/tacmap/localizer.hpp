@@ -1271,6 +1271,21 @@ inline void check_arm_motion(const arm_pose& from, const arm_pose& to, double dx
          ") mm overflows a double. Expected poses on one object, a few metres apart at "
          "most — a coordinate is corrupt or in the wrong unit");
 }
+
+/// `touch_at`'s motion between two finite arm poses for a known heading (a planar localizer or
+/// a library): the difference of the positions (`check_arm_motion`), refused when the yaw turned
+/// by more than 5 degrees, which breaks the planar model. `who` names the caller and `turned`
+/// finishes the refusal's sentence (why the heading is known, and what to do).
+inline odometry known_heading_arm_motion(const arm_pose& from, const arm_pose& to, const char* who,
+                                         const char* turned) {
+  const double dx = to.x_mm - from.x_mm, dy = to.y_mm - from.y_mm;
+  check_arm_motion(from, to, dx, dy);
+  const double turn = pose_grid<float>::wrap_angle(to.theta_rad - from.theta_rad);
+  if (std::abs(turn) > 5.0 * std::numbers::pi / 180.0)
+    fail(who, ": the arm's yaw changed by ", turn * 180.0 / std::numbers::pi,
+         " degrees since the previous touch, but ", turned);
+  return odometry{.dx_mm = dx, .dy_mm = dy};
+}
 }  // namespace detail
 
 /// What one touch gave: the estimate, how sure the filter is of it, and what to do.
@@ -1559,24 +1574,20 @@ class basic_localizer {
   touch_result touch_at(const tactile_frame& frame, const arm_pose& where) {
     check_finite(where.x_mm, where.y_mm, where.theta_rad, "touch_at");
     std::optional<sensor_odometry> moved;
-    if (last_pose_) {
+    if (last_pose_ && planar_) {
+      const odometry m = detail::known_heading_arm_motion(
+          *last_pose_, where, "localizer::touch_at",
+          "this localizer assumes a known, fixed heading (headings = 0); set "
+          "localizer_config::headings (e.g. 36) to localize the heading too");
+      moved = sensor_odometry{.du_mm = m.dx_mm, .dv_mm = m.dy_mm};
+    } else if (last_pose_) {
       const double dx = where.x_mm - last_pose_->x_mm, dy = where.y_mm - last_pose_->y_mm;
       detail::check_arm_motion(*last_pose_, where, dx, dy);
       const double turn = pose_grid<float>::wrap_angle(where.theta_rad - last_pose_->theta_rad);
-      if (planar_) {
-        if (std::abs(turn) > 5.0 * std::numbers::pi / 180.0)
-          detail::fail("localizer::touch_at: the arm's yaw changed by ",
-                       turn * 180.0 / std::numbers::pi,
-                       " degrees since the previous touch, but this localizer assumes a known, "
-                       "fixed heading (headings = 0); set localizer_config::headings (e.g. 36) "
-                       "to localize the heading too");
-        moved = sensor_odometry{.du_mm = dx, .dv_mm = dy};
-      } else {
-        // The motion in the sensor's frame at the previous touch: R(-theta) (dx, dy).
-        const double c = std::cos(last_pose_->theta_rad), s = std::sin(last_pose_->theta_rad);
-        moved = sensor_odometry{
-            .du_mm = c * dx + s * dy, .dv_mm = -s * dx + c * dy, .dtheta_rad = turn};
-      }
+      // The motion in the sensor's frame at the previous touch: R(-theta) (dx, dy).
+      const double c = std::cos(last_pose_->theta_rad), s = std::sin(last_pose_->theta_rad);
+      moved =
+          sensor_odometry{.du_mm = c * dx + s * dy, .dv_mm = -s * dx + c * dy, .dtheta_rad = turn};
     }
     touch_result r = step(frame, moved);
     last_pose_ = where;
