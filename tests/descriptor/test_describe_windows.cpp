@@ -255,6 +255,56 @@ TEST_CASE("describe_windows: windows whose peaks span many orders of magnitude")
   CHECK(max_difference(d, moderate, window, patch_offsets(window, 18, 9)) <= 1e-5);
 }
 
+namespace {
+/// sift_lite whose describe_windows puts `value` into one element of one row of windows.
+struct poisoned_rows : tacmap::sift_lite {
+  float value = 0.0F;
+  template <class Sink>
+  void describe_windows(const tacmap::image_view<float>& map, pixel_size window,
+                        std::span<const grid_cell> offsets, Sink&& sink) const {
+    tacmap::sift_lite::describe_windows(map, window, offsets,
+                                        [&](Eigen::Index r, const auto& block) {
+                                          if (r != 2) return sink(r, block);
+                                          auto poisoned = block.eval();
+                                          poisoned(5, 7) = value;
+                                          sink(r, poisoned);
+                                        });
+  }
+};
+static_assert(tacmap::describes_windows<poisoned_rows>);
+}  // namespace
+
+TEST_CASE("describe_windows: a non-finite descriptor value is refused in either storage") {
+  // int8 storage finds them among the quantiser's clamped elements instead of reading every
+  // row's values twice: it must name them as the float check does.
+  const image<float> map = noise_map<float>(48, 31, 13);
+  const pixel_size window{18, 42};
+  using tacmap::descriptor_storage;
+  for (const descriptor_storage storage : {descriptor_storage::int8, descriptor_storage::float32})
+    for (const float bad :
+         {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+          -std::numeric_limits<float>::infinity()}) {
+      CAPTURE(static_cast<int>(storage));
+      CAPTURE(bad);
+      poisoned_rows d;
+      d.value = bad;
+      const std::string m = message_of([&] {
+        const tacmap::descriptor_likelihood<poisoned_rows> model(d, map, window,
+                                                                 {.storage = storage});
+      });
+      CHECK(m.find("poisoned_rows") != std::string::npos);
+      CHECK(m.find("expected finite values") != std::string::npos);
+      CHECK(m.find("element 5 of descriptor") != std::string::npos);
+    }
+  // A finite value above int8's range is clamped and counted, not refused.
+  poisoned_rows big;
+  big.value = 1e6F;
+  const tacmap::descriptor_likelihood<poisoned_rows> model(big, map, window,
+                                                           {.storage = descriptor_storage::int8});
+  CHECK(model.stores_quantized());
+  CHECK(model.quantization_clamped() >= 1U);
+}
+
 TEST_CASE("describe_windows: bad input is refused with what was expected") {
   const tacmap::sift_lite d;
   const image<float> map = noise_map<float>(50, 30, 3);
