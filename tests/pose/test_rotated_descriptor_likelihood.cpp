@@ -116,6 +116,41 @@ Eigen::ArrayXf reference_distances(const tacmap::image<float>& z, int quarter_tu
 
 }  // namespace
 
+namespace {
+/// sift_lite whose field of the map (not of a tactile canvas) holds `value` at one element.
+struct poisoned_map_field : sift_lite {
+  float value = 0.0F;
+  tacmap::descriptor_field<float> compute(const tacmap::image<float>& img) const {
+    auto f = sift_lite::compute(img);
+    if (img.rows() == map64().rows() && img.cols() == map64().cols())
+      f.values(5, f.values.cols() / 2) = value;
+    return f;
+  }
+};
+}  // namespace
+
+TEST_CASE("rotated likelihood: a non-finite value in the map's field is refused by name") {
+  // The field is scanned only where the tiles' squared norms are not finite: each such value
+  // must still be named, and a large finite one (whose square overflows) accepted.
+  for (const float bad :
+       {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+        -std::numeric_limits<float>::infinity()}) {
+    CAPTURE(bad);
+    poisoned_map_field d;
+    d.value = bad;
+    const std::string m = message_of([&] {
+      const rotated_descriptor_likelihood<poisoned_map_field> model(d, map64(), grid64(4));
+    });
+    CAPTURE(m);
+    CHECK(m.find("poisoned_map_field") != std::string::npos);
+    CHECK(m.find("described the map with the value") != std::string::npos);
+    CHECK(m.find("element 5 of descriptor") != std::string::npos);
+  }
+  poisoned_map_field big;
+  big.value = 1e30F;
+  CHECK_NOTHROW(rotated_descriptor_likelihood<poisoned_map_field>(big, map64(), grid64(4)));
+}
+
 TEST_CASE("rotated likelihood: rotated_tactile turns the image by +theta (pose_grid convention)") {
   const auto& model = model64(4);  // headings 0, +90, -180, -90 degrees
   const auto g = grid64(4);

@@ -266,11 +266,11 @@ void check_descriptors(const D& d, const Eigen::DenseBase<Derived>& values, Eige
              "finite descriptor too, e.g. all zeros)");
 }
 
-/// Checks a dense field D::compute returned for an image of `rows` x `cols` pixels: its
-/// positions (rows - patch + 1) x (cols - patch + 1), then its values (`check_descriptors`).
+/// Checks the shape of a dense field D::compute returned for an image of `rows` x `cols`
+/// pixels: its positions (rows - patch + 1) x (cols - patch + 1), its dimension.
 template <class D, class T>
-void check_field(const D& d, const descriptor_field<T>& f, Eigen::Index rows, Eigen::Index cols,
-                 const char* what) {
+void check_field_shape(const D& d, const descriptor_field<T>& f, Eigen::Index rows,
+                       Eigen::Index cols, const char* what) {
   const Eigen::Index p = d.patch_size();
   if (f.rows != rows - p + 1 || f.cols != cols - p + 1 || f.values.cols() != f.rows * f.cols)
     fail("descriptor ", type_name<D>(), ": compute() of ", what, " (", rows, " x ", cols,
@@ -278,6 +278,14 @@ void check_field(const D& d, const descriptor_field<T>& f, Eigen::Index rows, Ei
          " columns; expected ", rows - p + 1, " x ", cols - p + 1,
          " positions (image size - patch_size() + 1), one column each (descriptor/concept.hpp, "
          "requirement 4)");
+  check_descriptor_shape(d, f.values, f.rows * f.cols, what);
+}
+
+/// Checks a dense field: check_field_shape, then its values (`check_descriptors`).
+template <class D, class T>
+void check_field(const D& d, const descriptor_field<T>& f, Eigen::Index rows, Eigen::Index cols,
+                 const char* what) {
+  check_field_shape(d, f, rows, cols, what);
   check_descriptors(d, f.values, f.rows * f.cols, what);
 }
 

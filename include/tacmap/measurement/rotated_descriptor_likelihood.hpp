@@ -144,10 +144,17 @@ class rotated_descriptor_likelihood {
 
     const image<scalar_type> map_t = map.template cast<scalar_type>();
     const descriptor_field<scalar_type> field = descriptor_.compute(map_t);
-    detail::check_field(descriptor_, field, map.rows(), map.cols(), "the map");
+    detail::check_field_shape(descriptor_, field, map.rows(), map.cols(), "the map");
     field_rows_ = field.rows;
     field_cols_ = field.cols;
     field_tiles_ = detail::descriptor_tiles<scalar_type>(field.values);
+    // A position's squared norm is NaN or infinite when one of its values is (or when finite
+    // values overflow the square): the field is scanned for the value to name only then, not
+    // read a second time (that read was 7 % of preparing the paper's map at 36 headings).
+    const Eigen::Map<const Eigen::Array<scalar_type, Eigen::Dynamic, 1>> norms(
+        field_tiles_.squared_norms_from(0), field_tiles_.positions());
+    if (!std::isfinite(static_cast<double>(norms.sum())))
+      detail::check_field(descriptor_, field, map.rows(), map.cols(), "the map");
     build_mean_sample(field);
     rows_ = map.rows() - window.height + 1;
     cols_ = map.cols() - window.width + 1;
