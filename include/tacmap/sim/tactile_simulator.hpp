@@ -190,7 +190,8 @@ struct simulator_params {
   /// (hysteresis of the foam and the resistive layer: a ghost of the last press); 0 = none.
   double hysteresis = 0.0;
   /// Standard deviation of each frame's step of the taxels' baseline random walk, counts (half
-  /// the variance common to the array, half per taxel); 0 = a fixed zero.
+  /// the variance common to the array, half per taxel); 0 = a fixed zero. A burst's frames
+  /// share one press's step (`render_press`).
   double baseline_drift_counts = 0.0;
   /// Frames read per press (`render_press`): 1 = one settled frame (`render`); the paper read 20.
   std::size_t frames_per_press = 1;
