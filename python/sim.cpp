@@ -145,7 +145,14 @@ void bind_simulation(py::module_& m) {
                      "Fraction of the previous frame's counts that persists into the next.")
       .def_readwrite("baseline_drift_counts", &simulator_params::baseline_drift_counts,
                      "Standard deviation of each frame's step of the taxels' baseline random "
-                     "walk, counts.")
+                     "walk, counts (a burst's frames share one press's step).")
+      .def_readwrite("frames_per_press", &simulator_params::frames_per_press,
+                     "Frames read per press (render_press): 1 = one settled frame; the paper "
+                     "read 20.")
+      .def_readwrite("settle_start", &simulator_params::settle_start,
+                     "Bursts: the first frame's fraction of the press depth (1 = no settling).")
+      .def_readwrite("settle_frames", &simulator_params::settle_frames,
+                     "Bursts: time constant of the settling, frames.")
       .def_readwrite("seed", &simulator_params::seed,
                      "Fixes gains, dead taxels and the noise stream.")
       .def_property(
@@ -161,7 +168,8 @@ void bind_simulation(py::module_& m) {
       sp,
       {"geometry", "press_depth_mm", "supersample", "foam_sigma_mm", "gain_counts_per_mm",
        "gain_variation", "noise_counts", "dead_fraction", "full_scale_counts", "saturation_counts",
-       "hysteresis", "baseline_drift_counts", "seed", "frame_interval_ns"},
+       "hysteresis", "baseline_drift_counts", "frames_per_press", "settle_start", "settle_frames",
+       "seed", "frame_interval_ns"},
       "Configuration of the tactile simulator (C++ tacmap::simulator_params). The defaults "
       "describe the paper's Weiss array on a 4 mm relief: a 1 mm press gives about 2000 of "
       "4095 counts on a fully loaded cell, with a few percent of noise and gain spread.");
@@ -221,6 +229,18 @@ void bind_simulation(py::module_& m) {
           "saturated, dead taxels at 0. depth_scale and the tilts vary this press. Advances "
           "the noise stream and the frame number. Raises ValueError when the footprint leaves "
           "the map (the message gives the map's extent).")
+      .def(
+          "render_press",
+          [](tactile_simulator& s, double x, double y, double theta, double depth_scale,
+             double tilt_u, double tilt_v) {
+            return s.render_press({x, y, theta}, press_of(depth_scale, tilt_u, tilt_v));
+          },
+          py::arg("x_mm"), py::arg("y_mm"), py::arg("theta_rad") = 0.0, py::kw_only(),
+          py::arg("depth_scale") = 1.0, py::arg("tilt_u_rad") = 0.0, py::arg("tilt_v_rad") = 0.0,
+          "One press read as params.frames_per_press frames (a list of Frame): each with its "
+          "own noise, the first ones still settling; combine_burst combines them as the localizer "
+          "does. "
+          "With one frame per press, [render(...)] exactly.")
       .def(
           "expected_counts",
           [](const tactile_simulator& s, double x, double y, double theta, double depth_scale,
@@ -541,6 +561,10 @@ void bind_simulation(py::module_& m) {
       .def_readonly("lost_track", &touch_record::lost_track,
                     "The motion before this touch carried the whole belief off the map and the "
                     "run restarted from a uniform belief.")
+      .def_readonly("frames_read", &touch_record::frames_read,
+                    "Frames the simulator read for this press (SimulatorParams.frames_per_press).")
+      .def_readonly("frames_combined", &touch_record::frames_combined,
+                    "Of those, the frames combine_burst kept (1 for a single frame).")
       .def_readonly("accepted", &touch_record::accepted,
                     "False: preprocessing rejected the frame, no update.")
       .def_property_readonly(

@@ -198,7 +198,10 @@ std::string ece_text(const std::vector<double>& p, const std::vector<char>& ok) 
 // A configuration's name in the tables and the CSV: its filter's, and "/active" when its
 // touches are chosen by next_touch (--touch-order active).
 std::string config_label(const tacmap::localization_config& c) {
-  return c.name() + (c.order == tacmap::touch_order::active ? "/active" : "");
+  return c.name() + (c.order == tacmap::touch_order::active ? "/active" : "") +
+         (c.simulator.frames_per_press == 1
+              ? std::string()
+              : "/frames " + std::to_string(c.simulator.frames_per_press));
 }
 
 // Second table: per configuration, over every map — the expected calibration error (points) of
@@ -349,6 +352,9 @@ std::string conditions_text(const char* scenario, const tacmap::simulator_params
   add(sensor, "saturation counts", sim.saturation_counts, 0.0);
   add(sensor, "hysteresis", sim.hysteresis, 0.0);
   add(contact, "depth mm", sim.press_depth_mm, -1.0);
+  // A burst's settling (--frames-per-press > 1), where it is not the default.
+  add(contact, "burst settle start", sim.settle_start, tacmap::simulator_params{}.settle_start);
+  add(contact, "burst settle frames", sim.settle_frames, tacmap::simulator_params{}.settle_frames);
   add(contact, "depth jitter", e.press_depth_jitter, 0.0);
   add(contact, "orientation jitter deg", e.orientation_jitter_deg, 0.0);
   add(contact, "tilt jitter deg", e.tilt_jitter_deg, 0.0);
@@ -426,6 +432,16 @@ int main(int argc, char** argv) try {
        {}},
       {"--saturation", "sensor: soft saturation level, counts (0 = linear)", 0.0, 1e6, {}},
       {"--hysteresis", "sensor: fraction of the previous frame that persists", 0.0, 0.99, {}},
+      {"--settle-start",
+       "--frames-per-press > 1: depth fraction of a burst's first frame (1 = no settling)",
+       0.0,
+       1.0,
+       {}},
+      {"--settle-frames",
+       "--frames-per-press > 1: time constant of the settling, frames",
+       0.0,
+       1000.0,
+       {}},
   };
   std::vector<knob> lab_scenario_knobs{
       {"--shadow",
@@ -621,6 +637,14 @@ int main(int argc, char** argv) try {
                  "positions on the map; known heading, no faults); a comma-separated list runs "
                  "each")
       ->delimiter(',');
+  std::vector<std::size_t> frames_per_press{1};
+  app.add_option("--frames-per-press", frames_per_press,
+                 "frames the sensor reads per press (1 = one settled frame); more make a burst "
+                 "with its own noise per frame and a settling head, combined by the localizer's "
+                 "burst overload (combine_burst with localizer_config::burst); a comma-separated "
+                 "list runs each (e.g. 1,5,20; the paper read 20)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 1000));
   std::size_t active_candidates = 32;
   app.add_option("--active-candidates", active_candidates,
                  "--touch-order active: candidate positions drawn per touch")
@@ -816,6 +840,8 @@ int main(int argc, char** argv) try {
   set(lab_sensor_knobs[0], sim.baseline_drift_counts);
   set(lab_sensor_knobs[1], sim.saturation_counts);
   set(lab_sensor_knobs[2], sim.hysteresis);
+  set(lab_sensor_knobs[3], sim.settle_start);
+  set(lab_sensor_knobs[4], sim.settle_frames);
   double* const lab_fields[] = {
       &effects.shadow_depth,           &effects.shadow_edge_px,        &effects.defocus_px,
       &effects.map_scale_error,        &effects.light_press_fraction,  &effects.light_press_scale,
@@ -1087,6 +1113,17 @@ int main(int argc, char** argv) try {
     configs = std::move(expanded);
   }
 
+  // One copy of every configuration per --frames-per-press.
+  {
+    std::vector<tacmap::localization_config> expanded;
+    for (const std::size_t n : frames_per_press)
+      for (auto c : configs) {
+        c.simulator.frames_per_press = n;
+        expanded.push_back(c);
+      }
+    configs = std::move(expanded);
+  }
+
   std::vector<named_map> maps;
   if (!no_gecko) {
     if (gecko_dir.empty()) gecko_dir = default_gecko_dir(argc > 0 ? argv[0] : nullptr);
@@ -1150,7 +1187,7 @@ int main(int argc, char** argv) try {
          "map_x_mm,map_y_mm,error_mm,entropy_nats,accepted,localized,touches_to_localize,scenario,"
          "tau,headings,true_theta_rad,map_theta_rad,raised_dark,p_inverted,p_within_5mm,"
          "p_heading,verdict,log_evidence,estimate_x_mm,estimate_y_mm,map_error_mm,"
-         "log_prediction_support,contradicted,fault\n";
+         "log_prediction_support,contradicted,fault,frames_read,frames_combined\n";
 
   std::size_t total = 0;
   for (const auto& m : maps) {
@@ -1162,6 +1199,8 @@ int main(int argc, char** argv) try {
   std::map<std::string, confidence_tally> confidence;  // per configuration, over every map
   std::map<std::string, early_tally> by_touch;         // likewise
   std::map<std::string, ceiling_tally> ceilings;       // --oracle-ceiling, per configuration
+  // Per configuration: touches and frames combined into them (bursts, --frames-per-press).
+  std::map<std::string, std::pair<std::size_t, std::size_t>> bursts;
   const auto within3_of = [](const tacmap::sequence_result& r) {
     return tacmap::fault_recoveries(r.touches, 3);
   };
@@ -1256,8 +1295,13 @@ int main(int argc, char** argv) try {
               << ',' << csv_number(r.estimate_x_mm) << ',' << csv_number(r.estimate_y_mm) << ','
               << csv_number(r.map_error_mm) << ',' << csv_number(r.log_prediction_support) << ','
               << (r.contradicted ? 1 : 0) << ',' << (r.odometry_outlier || r.moved_unseen ? 1 : 0)
-              << '\n';
+              << ',' << r.frames_read << ',' << r.frames_combined << '\n';
         confidence[config_label(config)].add(run, config.headings > 0);
+        for (const auto& r : run.touches) {
+          auto& [touches, combined] = bursts[config_label(config)];
+          ++touches;
+          combined += r.frames_combined;
+        }
         ++done;
         if (!quiet) progress(done, total, m.name + " " + config_label(config));
       }
@@ -1290,6 +1334,18 @@ int main(int argc, char** argv) try {
   }
   print_confidence(confidence, configs);
   print_by_touch(by_touch, configs);
+  // What the bursts kept (`combine_burst` through the localizer's burst overload): the frames
+  // read per press and how many of them were combined, on average over every touch.
+  for (const auto& config : configs) {
+    if (config.simulator.frames_per_press == 1) continue;
+    const auto it = bursts.find(config_label(config));
+    if (it == bursts.end() || it->second.first == 0) continue;
+    std::printf(
+        "\n%s: %zu frames read per press, %.1f combined on average (the settling head "
+        "and outlier frames dropped)\n",
+        config_label(config).c_str(), config.simulator.frames_per_press,
+        static_cast<double>(it->second.second) / static_cast<double>(it->second.first));
+  }
   if (oracle_ceiling) print_ceilings(ceilings, configs);
   csv.close();
   if (!csv)

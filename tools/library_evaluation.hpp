@@ -82,7 +82,10 @@ struct library_tally {
 // A configuration's name in the tables and the CSV: its filter's, and "/active" when the library
 // filter chooses the touches (--touch-order active).
 inline std::string library_label(const tacmap::localization_config& c) {
-  return c.name() + (c.order == tacmap::touch_order::active ? "/active" : "");
+  return c.name() + (c.order == tacmap::touch_order::active ? "/active" : "") +
+         (c.simulator.frames_per_press == 1
+              ? std::string()
+              : "/frames " + std::to_string(c.simulator.frames_per_press));
 }
 
 inline std::string library_percent(std::size_t k, std::size_t n) {

@@ -596,6 +596,26 @@ class TestSimulation(unittest.TestCase):
         np.testing.assert_array_equal(relief, p.relief_mm())
         self.assertEqual(float(relief.max()), 4.0)
 
+    def test_a_press_read_as_a_burst(self):
+        p = gecko()
+        x, y = p.locations[3]
+        # One frame per press: exactly render.
+        one = simulator(9).render_press(x, y)
+        self.assertEqual(len(one), 1)
+        np.testing.assert_array_equal(one[0].counts, simulator(9).render(x, y).counts)
+        # Twenty: each frame its own noise, the first ones under-pressed; combine_burst drops them.
+        params = tacmap.SimulatorParams(seed=9, frames_per_press=20)
+        self.assertEqual((params.settle_start, params.settle_frames), (0.5, 2.0))
+        burst = tacmap.Simulator(p.relief_mm(), p.mm_per_px, params).render_press(x, y)
+        self.assertEqual(len(burst), 20)
+        self.assertLess(burst[0].counts.sum(), 0.8 * burst[-1].counts.sum())
+        self.assertFalse(np.array_equal(burst[-1].counts, burst[-2].counts))
+        combined = tacmap.combine_burst(burst)
+        self.assertEqual(combined.status[0], "settling")
+        self.assertLess(combined.used, 20)
+        with self.assertRaisesRegex(ValueError, "frames_per_press = 0"):
+            tacmap.Simulator(p.relief_mm(), p.mm_per_px, tacmap.SimulatorParams(frames_per_press=0))
+
     def test_an_experiment_keeps_its_protocol_alive(self):
         protocol = tacmap.load_protocol(GECKO)
         experiment = tacmap.Experiment(protocol, fast_config())

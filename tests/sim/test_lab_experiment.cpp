@@ -100,6 +100,34 @@ TEST_CASE("lab conditions: the harsh scenario runs end to end and is reproducibl
     CHECK(a.touches[t].error_mm == b.touches[t].error_mm);
 }
 
+TEST_CASE("frames per press: each press a burst, combined as the localizer's burst overload") {
+  tacmap::localization_config config;
+  config.model = tacmap::measurement_kind::ncc;
+  config.scenario = tacmap::scenario_params::harsh();
+  config.simulator = tacmap::harsh_sensor(config.simulator);
+  const auto one = tacmap::localization_experiment(gecko(), config).run(1, true);
+  config.simulator.frames_per_press = 20;
+  const auto burst = tacmap::localization_experiment(gecko(), config).run(1, true);
+  REQUIRE(one.touches.size() == burst.touches.size());
+  for (std::size_t t = 0; t < burst.touches.size(); ++t) {
+    CHECK(one.touches[t].frames_read == 1);
+    CHECK(one.touches[t].frames_combined == 1);
+    CHECK(burst.touches[t].frames_read == 20);
+    // combine_burst (config.burst's defaults) drops the settling head: the first frame is
+    // pressed to half the depth, far beyond the 5 % settle tolerance.
+    CHECK(burst.touches[t].frames_combined < 20);
+    CHECK(burst.touches[t].frames_combined >= 1);
+    // The frame kept is the combined one, of this press's frames (20 numbers per press).
+    CHECK(burst.frames[t].sequence / 20 == t);
+  }
+  // The configuration's burst settings are the ones used: a tolerance that takes every frame
+  // as settled keeps all 20.
+  config.burst.settle_tolerance = 10.0;
+  config.burst.outlier_tolerance = 10.0;
+  const auto all = tacmap::localization_experiment(gecko(), config).run(1);
+  for (const auto& r : all.touches) CHECK(r.frames_combined == 20);
+}
+
 TEST_CASE("self-calibration: never worse on a healthy sensor; measured on the worn one") {
   // The localizer's default model; the gecko's first 11 sequences.
   constexpr std::size_t n = 11;

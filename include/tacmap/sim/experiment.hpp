@@ -62,6 +62,7 @@
 #include "tacmap/sim/random.hpp"
 #include "tacmap/sim/scenario.hpp"
 #include "tacmap/sim/tactile_simulator.hpp"
+#include "tacmap/tactile/burst.hpp"
 #include "tacmap/tactile/preprocess.hpp"
 #include "tacmap/tactile/self_calibration.hpp"
 
@@ -216,6 +217,11 @@ struct touch_record {
   /// The motion before this touch carried the whole belief off the map (the filter refused it)
   /// and the run restarted from a uniform belief.
   bool lost_track = false;
+  /// Frames the simulator read for this press (`simulator_params::frames_per_press`) and how
+  /// many of them `combine_burst` kept (the localizer's `touch_result::frames_combined`; 1 for
+  /// a single frame).
+  std::size_t frames_read = 1;
+  std::size_t frames_combined = 1;
   bool accepted = true;  ///< false: preprocess rejected the frame, no update
   frame_rejection rejection = frame_rejection::none;
   /// The belief's P(|position - estimate| <= 5 mm) after this touch (`assess`; the estimate is
@@ -247,8 +253,9 @@ struct sequence_result {
   // The next three are filled only when `run` is asked to keep images (keep_images = true);
   // otherwise they are empty, not one entry per touch: check their size before indexing.
   std::vector<image<float>> tactile_images;  ///< preprocessed, map scale (empty when rejected)
-  std::vector<tactile_frame> frames;         ///< the raw frames the simulator rendered
-  std::vector<image<float>> beliefs;         ///< position belief after each touch (all hypotheses)
+  /// The raw frames the simulator rendered (a burst's combined frame: what the filter used)
+  std::vector<tactile_frame> frames;
+  std::vector<image<float>> beliefs;  ///< position belief after each touch (all hypotheses)
   /// The measurement model's log-likelihood over the filter's states for each touch (empty for
   /// a rejected frame), filled only when asked for (`keep_log_likelihoods`): what a calibration
   /// replays with other likelihood scales (sim/calibration.hpp).
@@ -507,7 +514,7 @@ class basic_localization_experiment {
                     hv + (h - 2.0 * hv) * warmup_rng.uniform(), heading};
         at.x_mm = at.x_mm * scale + offset_mm;
         at.y_mm = at.y_mm * scale + offset_mm;
-        if (simulator.fits(at)) calibration->observe(simulator.render(at));
+        if (simulator.fits(at)) calibration->observe(read_press(simulator, at, {}).frame);
       }
     }
 
@@ -617,7 +624,8 @@ class basic_localization_experiment {
       }
       pressed.x_mm += offset_mm;
       pressed.y_mm += offset_mm;
-      tactile_frame frame = simulator.render(pressed, press);
+      const combined_burst read = read_press(simulator, pressed, press);
+      tactile_frame frame = read.frame;
       if (calibration) {
         calibration->observe(frame);
         frame = calibration->correct(frame).frame;
@@ -637,6 +645,8 @@ class basic_localization_experiment {
       rec.lost_track = lost_track;
       rec.accepted = pre.accepted();
       rec.rejection = pre.rejection;
+      rec.frames_read = simulator.params().frames_per_press;
+      rec.frames_combined = read.used;
       if (rec.accepted) {
         update_report report;
         if (keep_log_likelihoods) {
@@ -688,6 +698,23 @@ class basic_localization_experiment {
       }
     }
     return result;
+  }
+
+  // One press as the localizer takes it: one frame (`render`), or a burst of
+  // `frames_per_press` frames (`render_press`) combined as `basic_localizer::touch(span)` does
+  // (`combine_burst` with the configuration's `burst`). The result's `used` counts the frames
+  // combined (1 for a single frame).
+  [[nodiscard]] combined_burst read_press(tactile_simulator& simulator, const map_pose& at,
+                                          const press_variation& press) const {
+    if (simulator.params().frames_per_press == 1) {
+      combined_burst one;
+      one.frame = simulator.render(at, press);
+      one.status.assign(1, burst_frame_status::used);
+      one.used = 1;
+      return one;
+    }
+    const std::vector<tactile_frame> burst = simulator.render_press(at, press);
+    return combine_burst(std::span<const tactile_frame>(burst), config_.burst);
   }
 
   // The active order's next location: `active_candidates` positions drawn over the map's

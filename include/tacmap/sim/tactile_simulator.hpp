@@ -31,6 +31,16 @@
 //     the noise; `baseline_drift_counts` — every taxel's zero wanders as a random walk from
 //     frame to frame (half of each step common to the array, as temperature moves it, half the
 //     taxel's own), and is added to every live taxel, loaded or not.
+//  7. A press read as a burst (`frames_per_press` > 1, `render_press`): the paper "stays at each
+//     location for a certain time and 20 readings are thus collected" (Sec. IV-B). Every frame
+//     has its own read-out noise. The burst is read from the moment of contact, while the foam
+//     still creeps and the arm's position controller closes in: the press depth of frame k is
+//     1 - (1 - settle_start) exp(-k / settle_frames) of the press's own, a first-order rise
+//     (the settling head). The slow effects are the press's, not the frame's: the hysteresis
+//     ghost is the previous PRESS's (the foam recovers over seconds, a burst lasts tenths), and
+//     the baseline walks as far over a press's frames as over one frame (its step per frame is
+//     baseline_drift_counts / sqrt(N): drift follows time between presses, not read-outs). A
+//     single frame (N = 1) is read once the press has settled: exactly `render`.
 //
 // Frames: a frame is `geometry.rows` x `geometry.cols` counts; taxel (r, c) sits at offset
 // ((c - (cols - 1) / 2) pitch, (r - (rows - 1) / 2) pitch) from the sensor centre in the sensor's
@@ -50,6 +60,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
@@ -179,8 +190,17 @@ struct simulator_params {
   /// (hysteresis of the foam and the resistive layer: a ghost of the last press); 0 = none.
   double hysteresis = 0.0;
   /// Standard deviation of each frame's step of the taxels' baseline random walk, counts (half
-  /// the variance common to the array, half per taxel); 0 = a fixed zero.
+  /// the variance common to the array, half per taxel); 0 = a fixed zero. A burst's frames
+  /// share one press's step (`render_press`).
   double baseline_drift_counts = 0.0;
+  /// Frames read per press (`render_press`): 1 = one settled frame (`render`); the paper read 20.
+  std::size_t frames_per_press = 1;
+  /// A burst's first frame is pressed to this fraction of the press depth (the settling head;
+  /// bursts only). 1 = no settling.
+  double settle_start = 0.5;
+  /// Time constant of the settling, frames: frame k of a burst is pressed to
+  /// 1 - (1 - settle_start) exp(-k / settle_frames) of the depth. 0 = settled from frame 1 on.
+  double settle_frames = 2.0;
   std::uint64_t seed = 1;  ///< fixes gains, dead taxels and the noise stream
   std::chrono::nanoseconds frame_interval = std::chrono::milliseconds(10);  ///< timestamp step
 
@@ -200,6 +220,16 @@ struct simulator_params {
                  " counts (0 = linear; a few thousand for a resistive cell)");
     non_negative("baseline_drift_counts", baseline_drift_counts,
                  " counts per frame (standard deviation of the baseline's step)");
+    if (frames_per_press < 1 || frames_per_press > 1000)
+      detail::fail("simulator_params: frames_per_press = ", frames_per_press,
+                   "; expected 1 .. 1000 frames read per press (1 = one settled frame; the "
+                   "paper read 20)");
+    if (!(settle_start >= 0.0 && settle_start <= 1.0))
+      detail::fail("simulator_params: settle_start = ", settle_start,
+                   "; expected a fraction in [0, 1] of the press depth reached by a burst's "
+                   "first frame (1 = no settling)");
+    non_negative("settle_frames", settle_frames,
+                 " frames (time constant of a burst's settling; 0 = settled after one frame)");
     if (!(hysteresis >= 0.0 && hysteresis < 1.0))
       detail::fail("simulator_params: hysteresis = ", hysteresis,
                    "; expected a fraction in [0, 1) of the previous frame that persists "
@@ -382,6 +412,49 @@ class tactile_simulator {
           (expected.cast<double>() + params_.hysteresis * previous_.cast<double>()).cast<float>();
       previous_ = fresh;
     }
+    return read_out(std::move(expected), params_.baseline_drift_counts);
+  }
+
+  /// Depth fraction of frame `k` (0-based) of a burst of `frames` (file comment, step 7): 1
+  /// for a single frame, 1 - (1 - settle_start) exp(-k / settle_frames) in a burst.
+  [[nodiscard]] double settling(std::size_t k, std::size_t frames) const {
+    if (frames <= 1) return 1.0;
+    if (!(params_.settle_frames > 0.0)) return k == 0 ? params_.settle_start : 1.0;
+    return 1.0 -
+           (1.0 - params_.settle_start) * std::exp(-static_cast<double>(k) / params_.settle_frames);
+  }
+
+  /// One press read as `params().frames_per_press` frames (file comment, step 7): each with its
+  /// own noise, the first ones still settling; the hysteresis ghost is the previous press's and
+  /// the baseline walks as far over the burst as over one frame. With one frame per press,
+  /// exactly `{render(pose, press)}`. Advances the noise stream and the frame number.
+  [[nodiscard]] std::vector<tactile_frame> render_press(const map_pose& pose,
+                                                        const press_variation& press = {}) {
+    const std::size_t n = params_.frames_per_press;
+    if (n == 1) return {render(pose, press)};
+    press.validate();
+    const image<float> ghost = previous_;
+    const double drift_step = params_.baseline_drift_counts / std::sqrt(static_cast<double>(n));
+    std::vector<tactile_frame> frames;
+    frames.reserve(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      press_variation settling_press = press;
+      settling_press.depth_scale = press.depth_scale * settling(k, n);
+      image<float> expected = expected_counts(pose, settling_press);
+      if (params_.hysteresis > 0.0) {
+        previous_ = expected;  // the press's last frame is the next press's ghost
+        expected =
+            (expected.cast<double>() + params_.hysteresis * ghost.cast<double>()).cast<float>();
+      }
+      frames.push_back(read_out(std::move(expected), drift_step));
+    }
+    return frames;
+  }
+
+ private:
+  // Steps 5-6 after the hysteresis: soft saturation, the baseline's walk by `drift_step`, noise,
+  // rounding, the full scale and dead taxels; numbers the frame.
+  [[nodiscard]] tactile_frame read_out(image<float> expected, double drift_step) {
     if (params_.saturation_counts > 0.0) {
       const double s = params_.saturation_counts;
       expected = expected.unaryExpr(
@@ -389,7 +462,7 @@ class tactile_simulator {
     }
     if (params_.baseline_drift_counts > 0.0) {
       // A random walk: the baseline a touch meets is where the previous frames left it.
-      const double step = params_.baseline_drift_counts * std::sqrt(0.5);
+      const double step = drift_step * std::sqrt(0.5);
       const double common = step * drift_rng_.normal();
       for (Eigen::Index t = 0; t < baseline_.size(); ++t)
         baseline_.data()[t] += static_cast<float>(common + step * drift_rng_.normal());
@@ -416,7 +489,6 @@ class tactile_simulator {
     return frame;
   }
 
- private:
   struct footprint {
     double x_min, x_max, y_min, y_max;
   };
