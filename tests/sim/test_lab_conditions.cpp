@@ -6,6 +6,7 @@
 #include <cmath>
 #include <string>
 
+#include "sim_fixtures.hpp"
 #include "tacmap/sim/scenario.hpp"
 #include "tacmap/sim/tactile_simulator.hpp"
 #include "test_support.hpp"
@@ -21,21 +22,10 @@ using tacmap_test::message_of;
 
 namespace {
 
-constexpr double px = 3.4 / 3.0;
-
-image<float> flat_relief() { return image<float>::Constant(120, 120, 4.0F); }
-
-image<float> step_relief() {
-  image<float> r = image<float>::Zero(120, 120);
-  r.block(0, 60, 120, 60).setConstant(4.0F);
-  return r;
-}
-
-simulator_params quiet(simulator_params p = {}) {
-  p.noise_counts = 0.0;
-  p.gain_variation = 0.0;
-  return p;
-}
+constexpr double px = tacmap_test::paper_mm_per_px;
+using tacmap_test::flat_relief;
+using tacmap_test::quiet;
+using tacmap_test::step_relief;
 
 }  // namespace
 
