@@ -290,7 +290,7 @@ void bind_config(py::module_& m) {
           [](localizer_config& c, double a) { c.open_set.evidence_weight = a; },
           "a in (0, 1] of the unknown surface's model (C++ open_set_params::evidence_weight): "
           "each touch moves the log odds of 'not this object' by -a (S - d), S its "
-          "log_prediction_support. Fitted: 0.645; 1 with unknown_support_margin 0 is the "
+          "log_prediction_support. Fitted: 0.551; 1 with unknown_support_margin 0 is the "
           "memoryless model.")
       .def_property(
           "unknown_support_margin",
@@ -298,7 +298,7 @@ void bind_config(py::module_& m) {
           [](localizer_config& c, double d) { c.open_set.support_margin = d; },
           "d in [0, 20] nats of the unknown surface's model (C++ "
           "open_set_params::support_margin): the support a touch needs before it counts for "
-          "the map. Fitted: 0.769.")
+          "the map. Fitted: 0.927.")
       .def_property(
           "unknown_model",
           [](const localizer_config& c) {
@@ -322,19 +322,19 @@ void bind_config(py::module_& m) {
           "unknown_shadow_weight",
           [](const localizer_config& c) { return c.open_set.shadow_weight; },
           [](localizer_config& c, double b) { c.open_set.shadow_weight = b; },
-          "b in (0, 1] of the shadow model (C++ open_set_params::shadow_weight). Fitted: 0.519.")
+          "b in (0, 1] of the shadow model (C++ open_set_params::shadow_weight). Fitted: 0.538.")
       .def_property(
           "unknown_shadow_support_weight",
           [](const localizer_config& c) { return c.open_set.shadow_support_weight; },
           [](localizer_config& c, double w) { c.open_set.shadow_support_weight = w; },
           "c in [0, 1] of the shadow model (C++ open_set_params::shadow_support_weight). "
-          "Fitted: 0.296.")
+          "Fitted: 0.241.")
       .def_property(
           "unknown_shadow_margin",
           [](const localizer_config& c) { return c.open_set.shadow_margin; },
           [](localizer_config& c, double margin) { c.open_set.shadow_margin = margin; },
           "m in [-20, 20] nats of the shadow model (C++ open_set_params::shadow_margin). "
-          "Fitted: 0.587.");
+          "Fitted: 0.618.");
   enum_property(cfg, "appearance", &localizer_config::appearance, appearance_names_,
                 "How the map's brightness relates to the object's height: 'fixed' (raised "
                 "parts look bright, as the paper's gecko), 'latent' (both relations are "

@@ -148,7 +148,7 @@ class TestLibraryLocalizer(unittest.TestCase):
         self.assertEqual(config.unknown_model, "shadow")
         self.assertEqual(fast_config().unknown_model, "support")
         self.assertEqual((config.unknown_shadow_weight, config.unknown_shadow_support_weight,
-                          config.unknown_shadow_margin), (0.519, 0.296, 0.587))
+                          config.unknown_shadow_margin), (0.538, 0.241, 0.618))
         others = [("blobs a", blobs(p.map.shape, 5), p.mm_per_px),
                   ("blobs b", blobs(p.map.shape, 6), p.mm_per_px)]
         results, _ = library_sequence(tacmap.LibraryLocalizer(others, config), simulator(31), 0)
