@@ -534,8 +534,8 @@ class filter_core {
   // touched (at known heading on the paper's grid the whole-grid passes of the estimate and
   // the disc were a third of a localized touch).
   static constexpr bool summary_grid =
-      !library_state_grid<Grid> &&
-      ((Grid::dimension == 3 && has_circular_coordinates<Grid>) || Grid::dimension == 2);
+      !library_state_grid<Grid> && ((Grid::dimension == 3 && has_circular_coordinates<Grid>) ||
+                                    (Grid::dimension == 2 && !has_circular_coordinates<Grid>));
   bool summarised() const {
     if constexpr (summary_grid) {
       if (!stats_[0].summarises()) return false;

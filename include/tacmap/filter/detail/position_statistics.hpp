@@ -67,7 +67,7 @@ class position_statistics {
     if constexpr (G::dimension == 3 && has_circular_coordinates<G>)
       if (G::circular[2] && !G::circular[0] && !G::circular[1] && positions_form_lattice())
         summarises_ = layered_lattice(grid);
-    if constexpr (G::dimension == 2)
+    if constexpr (G::dimension == 2 && !has_circular_coordinates<G>)  // linear moments
       if (positions_form_lattice() && grid.rows() * grid.cols() == position_count_) {
         summarises_ = true;  // one layer: the plane's rows
         if constexpr (latent_state_grid<G>) hypotheses_ = grid.hypotheses();
