@@ -68,6 +68,30 @@ TEST_CASE_TEMPLATE("mass_sum's SIMD kernels equal the double reference at every 
   }
 }
 
+TEST_CASE("double_sum: every value in double, the same value at every call, at every length") {
+  for (const std::size_t n : {0U, 1U, 7U, 8U, 9U, 15U, 16U, 17U, 120U, 1000U, 8137U, 100003U}) {
+    CAPTURE(n);
+    const auto v = mass_values<float>(n, 1.0);
+    const auto ni = static_cast<Eigen::Index>(n);
+    const double ref = double_sum(v.data(), n);
+    const double s = tacmap::detail::double_sum(v.data(), ni);
+    // Double precision (only the order's rounding), not mass_sum's float chunks.
+    CHECK(std::abs(s - ref) <= 1e-15 * static_cast<double>(n + 1) * std::abs(ref));
+    CHECK(tacmap::detail::double_sum(v.data(), ni) == s);
+    const Eigen::Map<const Eigen::ArrayXf> a(v.data(), ni);
+    CHECK(tacmap::detail::double_sum(a) == s);
+    // Every value counts once: the body's lanes and the tail's.
+    for (const std::size_t at : {std::size_t{0}, n / 2, n - 1}) {
+      if (n == 0) break;
+      auto w = v;
+      w[at] += 1.0F;
+      CHECK(tacmap::detail::double_sum(w.data(), ni) ==
+            doctest::Approx(double_sum(w.data(), n)).epsilon(1e-14));
+      CHECK(tacmap::detail::double_sum(w.data(), ni) == doctest::Approx(ref + 1.0).epsilon(1e-6));
+    }
+  }
+}
+
 TEST_CASE("16 million float values: the chunked sums stay within 1e-6, a flat float sum does not") {
   constexpr std::size_t n = 4000U * 4000U;
   const auto v = mass_values<float>(n, 1.0);

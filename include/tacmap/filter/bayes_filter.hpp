@@ -528,11 +528,14 @@ class filter_core {
     else
       return grid_;
   }
-  // True when the position statistics come from their row summary (pose grids:
-  // position_statistics::summarises), brought up to date here with the rows changed since the
-  // last call: a tracked touch's estimate and verdict then cost the rows its boxes touched.
+  // True when the position statistics come from their row summary (pose grids and planar
+  // lattices: position_statistics::summarises), brought up to date here with the rows changed
+  // since the last call: a tracked touch's estimate and verdict then cost the rows its boxes
+  // touched (at known heading on the paper's grid the whole-grid passes of the estimate and
+  // the disc were a third of a localized touch).
   static constexpr bool summary_grid =
-      !library_state_grid<Grid> && Grid::dimension == 3 && has_circular_coordinates<Grid>;
+      !library_state_grid<Grid> && ((Grid::dimension == 3 && has_circular_coordinates<Grid>) ||
+                                    (Grid::dimension == 2 && !has_circular_coordinates<Grid>));
   bool summarised() const {
     if constexpr (summary_grid) {
       if (!stats_[0].summarises()) return false;

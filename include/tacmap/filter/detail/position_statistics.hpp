@@ -67,6 +67,11 @@ class position_statistics {
     if constexpr (G::dimension == 3 && has_circular_coordinates<G>)
       if (G::circular[2] && !G::circular[0] && !G::circular[1] && positions_form_lattice())
         summarises_ = layered_lattice(grid);
+    if constexpr (G::dimension == 2 && !has_circular_coordinates<G>)  // linear moments
+      if (positions_form_lattice() && grid.rows() * grid.cols() == position_count_) {
+        summarises_ = true;  // one layer: the plane's rows
+        if constexpr (latent_state_grid<G>) hypotheses_ = grid.hypotheses();
+      }
     plane_only_ = stored < position_count_;
     if (plane_only_ && !summarises_) {  // not a lattice after all: every state's coordinates
       offsets_mm_.resize(G::dimension, position_count_);
@@ -78,7 +83,8 @@ class position_statistics {
 
   /// True when the statistics can come from a summary of the belief kept row by row
   /// (`refresh`, then the `*_summarised` members): a pose grid's positions, each heading layer
-  /// the same lattice at one angle. The summary holds, for every (heading layer, image row) of
+  /// the same lattice at one angle, or a planar lattice (one layer; the moments then divided by
+  /// the mass, as `estimate`'s). The summary holds, for every (heading layer, image row) of
   /// the position belief p (the hypotheses summed), the sums of p, c p and c^2 p (c the
   /// column), of p log p, its largest value and first column, each hypothesis's mass, and the
   /// position marginal (headings and hypotheses summed) as an image. A refresh recomputes only
@@ -96,7 +102,7 @@ class position_statistics {
   /// Brings the summary up to date with `b` after the cells `changed` (every layer) changed
   /// since the last refresh (`changed.all()`: recomputed whole, as the first refresh must be).
   void refresh(const G& grid, view_type b, const changed_cells& changed) const
-      requires(G::dimension == 3) {
+      requires(G::dimension >= 2) {
     TACMAP_ASSERT(summarises_, "position_statistics::refresh: no summary for this grid");
     const Eigen::Index rows = grid.rows();
     if (changed.all() || !summary_ready_) {
@@ -112,7 +118,7 @@ class position_statistics {
   }
 
   /// `estimate(grid, b)` from the summary (`refresh`ed with `b`).
-  [[nodiscard]] estimate_type estimate_summarised(const G& grid) const requires(G::dimension == 3) {
+  [[nodiscard]] estimate_type estimate_summarised(const G& grid) const requires(G::dimension >= 2) {
     TACMAP_ASSERT(summary_ready_, "position_statistics: estimate_summarised before refresh");
     estimate_type e;
     const Eigen::Index rows = grid.rows(), cols = grid.cols();
@@ -143,6 +149,59 @@ class position_statistics {
     e.map_probability = static_cast<double>(top);
     e.map_index = best + e.map_hypothesis * n;
     e.map_mm = grid.state_mm(e.map_index);
+    if constexpr (G::dimension == 2) {
+      summarised_plane_moments(rows, e);
+      return e;
+    } else {
+      return summarised_pose_moments(rows, e);
+    }
+  }
+
+ private:
+  // estimate_summarised of a planar lattice: lattice_moments' arithmetic on the rows' sums, and
+  // the entropy.
+  void summarised_plane_moments(Eigen::Index rows, estimate_type& e) const
+      requires(G::dimension == 2) {
+    double m0 = 0.0, mc = 0.0, mcc = 0.0, mr = 0.0, mrr = 0.0, mrc = 0.0, plogp = 0.0;
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      const row_summary& s = summary_[static_cast<std::size_t>(r)];
+      const auto y = static_cast<double>(r);
+      m0 += s.s0;
+      mc += s.s1;
+      mcc += s.s2;
+      mr += y * s.s0;
+      mrr += y * y * s.s0;
+      mrc += y * s.s1;
+      plogp += s.plogp;
+    }
+    const double mass = m0;
+    if (m0 > 0.0) {
+      mc /= m0;
+      mcc /= m0;
+      mr /= m0;
+      mrr /= m0;
+      mrc /= m0;
+    }
+    const double sx = lattice_step_(0), sy = lattice_step_(1);
+    typename estimate_type::vector_type mean_offset = estimate_type::vector_type::Zero();
+    mean_offset(0) = sx * mc;
+    mean_offset(1) = sy * mr;
+    typename estimate_type::matrix_type cov = estimate_type::matrix_type::Zero();
+    cov(0, 0) = sx * sx * std::max(mcc - mc * mc, 0.0);
+    cov(1, 1) = sy * sy * std::max(mrr - mr * mr, 0.0);
+    cov(0, 1) = cov(1, 0) = sx * sy * (mrc - mr * mc);
+    e.covariance_mm2 = cov;
+    e.mean_mm = origin_mm_ + mean_offset;
+    if (mass > 0.0 && std::isfinite(mass)) {
+      const double h = -plogp / mass + std::log(mass);
+      e.entropy_nats = std::clamp(h, 0.0, std::log(static_cast<double>(position_count_)));
+    }
+  }
+
+  // estimate_summarised of a pose grid: the moments over the heading layers.
+  estimate_type summarised_pose_moments(Eigen::Index rows, estimate_type& e) const
+      requires(G::dimension == 3) {
+    const Eigen::Index n = position_count_;
     // Moments in index units (c, r) per heading layer, then scaled: as circular_moments, the
     // sums of p are not divided by the mass (a normalised belief's is 1 within rounding).
     double m_all = 0.0, c_all = 0.0, cc_all = 0.0, r_all = 0.0, rr_all = 0.0, rc_all = 0.0;
@@ -202,6 +261,7 @@ class position_statistics {
     return e;
   }
 
+ public:
   /// `most_probable_disc(grid, b, radius_mm)` from the summary (`refresh`ed with `b`): the same
   /// position marginal, so the same disc bit for bit.
   [[nodiscard]] std::pair<Eigen::Vector2d, double> most_probable_disc_summarised(
@@ -258,8 +318,7 @@ class position_statistics {
       positions = marginal.data();
       e.hypothesis_probability.resize(static_cast<std::size_t>(grid.hypotheses()));
       for (Eigen::Index h = 0; h < grid.hypotheses(); ++h)
-        e.hypothesis_probability[static_cast<std::size_t>(h)] =
-            b.segment(h * n, n).template cast<double>().sum();
+        e.hypothesis_probability[static_cast<std::size_t>(h)] = double_sum(b.data() + h * n, n);
       for (std::size_t h = 1; h < e.hypothesis_probability.size(); ++h)
         if (e.hypothesis_probability[h] >
             e.hypothesis_probability[static_cast<std::size_t>(e.map_hypothesis)])
@@ -432,38 +491,51 @@ class position_statistics {
     const Eigen::Index pad = half[0];
     image<double>& prefix = disc_prefix_;  // prefix(r, pad + j) = sum of p(r, 0..j-1)
     prefix.resize(rows, cols + 1 + 2 * pad);
-    // Four rows at a time: a row's running sum is a chain of dependent adds, and four chains
-    // hide each other's latency (the same sums, in the same order per row).
+    // Built for the rows a scanned disc row reaches only (see the bound below), four rows at a
+    // time: a row's running sum is a chain of dependent adds, and four chains hide each other's
+    // latency (the same sums, in the same order per row, whichever rows are built together).
     constexpr Eigen::Index group = 4;
-    for (Eigen::Index r0 = 0; r0 < rows; r0 += group) {
-      const Eigen::Index k_end = std::min(group, rows - r0);
+    std::vector<char>& built = disc_built_;
+    built.assign(static_cast<std::size_t>(rows), 0);
+    const auto build_group = [&](const std::array<Eigen::Index, group>& todo, Eigen::Index k_end) {
       std::array<double, group> run{};
       for (Eigen::Index k = 0; k < k_end; ++k)
-        for (Eigen::Index j = 0; j <= pad; ++j) prefix(r0 + k, j) = 0.0;
+        for (Eigen::Index j = 0; j <= pad; ++j) prefix(todo[static_cast<std::size_t>(k)], j) = 0.0;
       if (k_end == group) {
         for (Eigen::Index c = 0; c < cols; ++c)
-          for (Eigen::Index k = 0; k < group; ++k)
-            prefix(r0 + k, pad + c + 1) = run[static_cast<std::size_t>(k)] += p(r0 + k, c);
+          for (std::size_t k = 0; k < group; ++k)
+            prefix(todo[k], pad + c + 1) = run[k] += p(todo[k], c);
       } else {
-        for (Eigen::Index k = 0; k < k_end; ++k)
+        for (std::size_t k = 0; k < static_cast<std::size_t>(k_end); ++k)
           for (Eigen::Index c = 0; c < cols; ++c)
-            prefix(r0 + k, pad + c + 1) = run[static_cast<std::size_t>(k)] += p(r0 + k, c);
+            prefix(todo[k], pad + c + 1) = run[k] += p(todo[k], c);
       }
-      for (Eigen::Index k = 0; k < k_end; ++k)
-        for (Eigen::Index j = pad + cols + 1; j < prefix.cols(); ++j)
-          prefix(r0 + k, j) = run[static_cast<std::size_t>(k)];
-    }
+      for (std::size_t k = 0; k < static_cast<std::size_t>(k_end); ++k)
+        for (Eigen::Index j = pad + cols + 1; j < prefix.cols(); ++j) prefix(todo[k], j) = run[k];
+    };
+    const auto build_rows = [&](Eigen::Index from, Eigen::Index to) {  // rows [from, to]
+      std::array<Eigen::Index, group> todo{};
+      Eigen::Index k_end = 0;
+      for (Eigen::Index r = std::max<Eigen::Index>(from, 0); r <= std::min(to, rows - 1); ++r) {
+        if (built[static_cast<std::size_t>(r)] != 0) continue;
+        built[static_cast<std::size_t>(r)] = 1;
+        todo[static_cast<std::size_t>(k_end++)] = r;
+        if (k_end == group) {
+          build_group(todo, k_end);
+          k_end = 0;
+        }
+      }
+      if (k_end > 0) build_group(todo, k_end);
+    };
     // Plain loops over contiguous rows (vectorised by the compiler): rows are short (~100), and
     // an Eigen expression per (row, run) costs more than its arithmetic.
     image<double>& disc = disc_mass_;
-    disc.setZero(rows, cols);
+    disc.resize(rows, cols);
     const Eigen::Index stride = prefix.cols();
-    // The first cell holding the most mass (row-major order): each row's maximum (vectorised)
-    // while it is in cache, then the first cell of the first row that reaches it.
-    double best_mass = -std::numeric_limits<double>::infinity();
-    Eigen::Index best_row = 0;
-    for (Eigen::Index r = 0; r < rows; ++r) {
+    const auto disc_row = [&](Eigen::Index r) {  // row r's discs; returns their largest mass
+      build_rows(r - reach_r, r + reach_r);
       double* out = disc.data() + r * cols;
+      std::fill(out, out + cols, 0.0);
       for (Eigen::Index dr = -reach_r; dr <= reach_r; ++dr) {
         const Eigen::Index rr = r + dr;
         if (rr < 0 || rr >= rows) continue;
@@ -473,8 +545,39 @@ class position_statistics {
         const double* lo = prefix.data() + rr * stride + pad - h;
         for (Eigen::Index c = 0; c < cols; ++c) out[c] += hi[c] - lo[c];
       }
-      const double row_best = Eigen::Map<const Eigen::ArrayXd>(out, cols).maxCoeff();
-      if (row_best > best_mass) {
+      return Eigen::Map<const Eigen::ArrayXd>(out, cols).maxCoeff();
+    };
+    // A bound on each row's discs: the totals of the rows they reach. A run's computed mass
+    // hi - lo is at most its row's running total (the prefix sums of non-negative values never
+    // decrease, lo >= 0, and rounding is monotone), so a disc's sum of runs is at most the sum
+    // of those totals in the runs' order, rounding included; the totals here are summed in
+    // another order (vectorised: no prefix is built for them), which differs from that by far
+    // less than the 1e-9 (relative) and 1e-300 (subnormal) slack added. Only rows whose bound
+    // reaches the best mass found can hold the best disc: once localized, the few rows around
+    // the peak are scanned and their prefixes built, not the grid's (the whole-grid scan was
+    // most of the disc's cost at known heading). The same disc, bit for bit, as scanning every
+    // row: the first cell (row-major) holding the most mass.
+    std::vector<double>& total = disc_total_;
+    total.resize(static_cast<std::size_t>(rows));
+    for (Eigen::Index r = 0; r < rows; ++r)
+      total[static_cast<std::size_t>(r)] = double_sum(p.data() + r * cols, cols);
+    std::vector<double>& bound = disc_bound_;
+    bound.assign(static_cast<std::size_t>(rows), 0.0);
+    Eigen::Index first = 0;
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      double b = 0.0;
+      for (Eigen::Index rr = std::max<Eigen::Index>(0, r - reach_r);
+           rr <= std::min(rows - 1, r + reach_r); ++rr)
+        b += total[static_cast<std::size_t>(rr)];
+      bound[static_cast<std::size_t>(r)] = b * (1.0 + 1e-9) + 1e-300;
+      if (bound[static_cast<std::size_t>(r)] > bound[static_cast<std::size_t>(first)]) first = r;
+    }
+    double best_mass = disc_row(first);
+    Eigen::Index best_row = first;
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      if (r == first || bound[static_cast<std::size_t>(r)] < best_mass) continue;
+      const double row_best = disc_row(r);
+      if (row_best > best_mass || (row_best == best_mass && r < best_row)) {
         best_mass = row_best;
         best_row = r;
       }
@@ -701,11 +804,11 @@ class position_statistics {
     for (Eigen::Index l = 0; l < heading_layers_; ++l) {
       const Eigen::Index at = l * plane + r * cols;
       row = b.segment(at, cols);
-      hypothesis_rows_[static_cast<std::size_t>(l * rows + r)] = row.template cast<double>().sum();
+      hypothesis_rows_[static_cast<std::size_t>(l * rows + r)] = double_sum(b.data() + at, cols);
       for (Eigen::Index h = 1; h < hypotheses_; ++h) {
         const auto part = b.segment(h * n + at, cols);
         hypothesis_rows_[static_cast<std::size_t>((h * heading_layers_ + l) * rows + r)] =
-            part.template cast<double>().sum();
+            double_sum(part.data(), cols);
         row += part;
       }
       row_summary& s = summary_[static_cast<std::size_t>(l * rows + r)];
@@ -761,6 +864,8 @@ class position_statistics {
       Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
   // most_probable_disc's scratch: the position marginal, its row prefix sums, the disc masses.
   mutable image<double> disc_marginal_, disc_prefix_, disc_mass_;
+  mutable std::vector<double> disc_bound_, disc_total_;
+  mutable std::vector<char> disc_built_;
   // estimate's scratch: the position marginal (latent grids), and lattice_moments' weights,
   // belief in double and per-row sums.
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, 1> estimate_marginal_;
