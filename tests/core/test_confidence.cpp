@@ -227,11 +227,7 @@ TEST_CASE("a planar lattice's summary: refreshed where cells changed, equal to t
                {"as_photographed", "inverted"});
   const Eigen::Index n = grid.size(), rows = grid.rows(), cols = grid.cols();
   const Eigen::Index plane = rows * cols;
-  std::uint32_t state = 777U;
-  const auto next = [&state](Eigen::Index bound) {
-    state = state * 1664525U + 1013904223U;
-    return static_cast<Eigen::Index>((state >> 8) % static_cast<std::uint32_t>(bound));
-  };
+  tacmap_test::lcg next(777U);
   Eigen::ArrayXf b(n);
   for (Eigen::Index i = 0; i < n; ++i) b(i) = 1e-3F + static_cast<float>(next(1000)) * 1e-6F;
   b /= b.sum();

@@ -20,6 +20,7 @@
 #include "tacmap/motion/pose_odometry_gaussian.hpp"
 #include "tacmap/sim/tactile_simulator.hpp"
 #include "tacmap/testing/conformance.hpp"
+#include "test_support.hpp"
 
 namespace test_pose_tracking {
 
@@ -429,11 +430,7 @@ TEST_CASE("a summary refreshed where cells changed equals one computed afresh, b
     using G = std::decay_t<decltype(grid)>;
     const Eigen::Index n = grid.size(), rows = grid.rows(), cols = grid.cols();
     const Eigen::Index plane = rows * cols, layers = grid.hypothesis_size() / plane * 2;
-    std::uint32_t state = 12345U;
-    const auto next = [&state](Eigen::Index bound) {
-      state = state * 1664525U + 1013904223U;
-      return static_cast<Eigen::Index>((state >> 8) % static_cast<std::uint32_t>(bound));
-    };
+    tacmap_test::lcg next(12345U);
     Eigen::ArrayXf b(n);
     for (Eigen::Index i = 0; i < n; ++i) b(i) = 1e-3F + static_cast<float>(next(1000)) * 1e-6F;
     b /= b.sum();

@@ -175,23 +175,7 @@ class position_statistics {
       plogp += s.plogp;
     }
     const double mass = m0;
-    if (m0 > 0.0) {
-      mc /= m0;
-      mcc /= m0;
-      mr /= m0;
-      mrr /= m0;
-      mrc /= m0;
-    }
-    const double sx = lattice_step_(0), sy = lattice_step_(1);
-    typename estimate_type::vector_type mean_offset = estimate_type::vector_type::Zero();
-    mean_offset(0) = sx * mc;
-    mean_offset(1) = sy * mr;
-    typename estimate_type::matrix_type cov = estimate_type::matrix_type::Zero();
-    cov(0, 0) = sx * sx * std::max(mcc - mc * mc, 0.0);
-    cov(1, 1) = sy * sy * std::max(mrr - mr * mr, 0.0);
-    cov(0, 1) = cov(1, 0) = sx * sy * (mrc - mr * mc);
-    e.covariance_mm2 = cov;
-    e.mean_mm = origin_mm_ + mean_offset;
+    set_lattice_moments(e, m0, mc, mcc, mr, mrr, mrc);
     if (mass > 0.0 && std::isfinite(mass)) {
       const double h = -plogp / mass + std::log(mass);
       e.entropy_nats = std::clamp(h, 0.0, std::log(static_cast<double>(position_count_)));
@@ -416,7 +400,15 @@ class position_statistics {
       mrr += y * y * per_row(r, 0);
       mrc += y * per_row(r, 1);
     }
-    // Expectations: divided by the mass (see estimate's per-state sums).
+    set_lattice_moments(e, m0, mc, mcc, mr, mrr, mrc);
+  }
+
+  // A planar lattice's mean and covariance from its sums over cells (col c, row r, in cells):
+  // m0 = sum p, mc = sum c p, mcc = sum c^2 p, mr = sum r p, mrr = sum r^2 p, mrc = sum r c p.
+  // Expectations are divided by the mass (see estimate's per-state sums); the covariance is
+  // clamped at 0 on the diagonal against rounding.
+  void set_lattice_moments(estimate_type& e, double m0, double mc, double mcc, double mr,
+                           double mrr, double mrc) const {
     if (m0 > 0.0) {
       mc /= m0;
       mcc /= m0;
