@@ -43,6 +43,7 @@
 #include <vector>
 
 #include "tacmap/descriptor/concept.hpp"
+#include "tacmap/detail/mass_sum.hpp"
 #include "tacmap/detail/memory_budget.hpp"
 #include "tacmap/detail/setting_ranges.hpp"
 #include "tacmap/detail/type_name.hpp"
@@ -208,27 +209,16 @@ inline std::vector<grid_cell> checked_patch_offsets(const char* who, const image
   return offsets;
 }
 
-/// The sum of every element of `values`, for check_descriptors: NaN or infinite when any
-/// element is (or when finite elements overflow it). Contiguous storage is summed in 32
-/// independent lanes (4 vector registers), not as Eigen's one chain of dependent adds, whose
-/// latency made the check 7 % of a pose model's preparation on the paper's map.
+/// The sum of every element of `values` in double, for check_descriptors: NaN or infinite
+/// when any element is. Contiguous storage through `double_sum` (interleaved totals), not as
+/// Eigen's one chain of dependent adds, whose latency made the check 7 % of a pose model's
+/// preparation on the paper's map.
 template <class Derived>
-typename Derived::Scalar finite_probe_sum(const Eigen::DenseBase<Derived>& values) {
-  using scalar = typename Derived::Scalar;
-  if constexpr (std::is_base_of_v<Eigen::PlainObjectBase<Derived>, Derived>) {
-    constexpr Eigen::Index lanes = 32;
-    const scalar* p = values.derived().data();
-    const Eigen::Index n = values.size();
-    Eigen::Array<scalar, lanes, 1> acc = Eigen::Array<scalar, lanes, 1>::Zero();
-    Eigen::Index i = 0;
-    for (; i + lanes <= n; i += lanes)
-      acc += Eigen::Map<const Eigen::Array<scalar, lanes, 1>>(p + i);
-    scalar total = acc.sum();
-    for (; i < n; ++i) total += p[i];
-    return total;
-  } else {
-    return values.sum();
-  }
+double finite_probe_sum(const Eigen::DenseBase<Derived>& values) {
+  if constexpr (std::is_base_of_v<Eigen::PlainObjectBase<Derived>, Derived>)
+    return double_sum(values.derived().data(), values.size());
+  else
+    return static_cast<double>(values.sum());
 }
 
 /// Checks descriptors a `descriptor` D delivered (`values`: dimension() rows, `columns`
@@ -256,7 +246,7 @@ void check_descriptors(const D& d, const Eigen::DenseBase<Derived>& values, Eige
   // One vectorised sum finds any NaN or infinity (they propagate); only then (or when finite
   // values overflow the sum) the element-wise scan, which names the first one: a check over
   // every per-window descriptor of a map must cost little beside describing them.
-  if (std::isfinite(static_cast<double>(finite_probe_sum(values)))) return;
+  if (std::isfinite(finite_probe_sum(values))) return;
   for (Eigen::Index c = 0; c < values.cols(); ++c)
     for (Eigen::Index i = 0; i < values.rows(); ++i)
       if (!std::isfinite(static_cast<double>(values(i, c))))

@@ -405,14 +405,8 @@ class tactile_simulator {
   /// compressed by the soft saturation) plus noise on loaded taxels, plus the drifting baseline,
   /// rounded, saturated, dead taxels at 0. Advances the noise stream and the frame number.
   [[nodiscard]] tactile_frame render(const map_pose& pose, const press_variation& press = {}) {
-    image<float> expected = expected_counts(pose, press);
-    if (params_.hysteresis > 0.0) {
-      const image<float> fresh = expected;
-      expected =
-          (expected.cast<double>() + params_.hysteresis * previous_.cast<double>()).cast<float>();
-      previous_ = fresh;
-    }
-    return read_out(std::move(expected), params_.baseline_drift_counts);
+    return read_out(with_ghost(expected_counts(pose, press), previous_),
+                    params_.baseline_drift_counts);
   }
 
   /// Depth fraction of frame `k` (0-based) of a burst of `frames` (file comment, step 7): 1
@@ -440,18 +434,25 @@ class tactile_simulator {
     for (std::size_t k = 0; k < n; ++k) {
       press_variation settling_press = press;
       settling_press.depth_scale = press.depth_scale * settling(k, n);
-      image<float> expected = expected_counts(pose, settling_press);
-      if (params_.hysteresis > 0.0) {
-        previous_ = expected;  // the press's last frame is the next press's ghost
-        expected =
-            (expected.cast<double>() + params_.hysteresis * ghost.cast<double>()).cast<float>();
-      }
-      frames.push_back(read_out(std::move(expected), drift_step));
+      // Every frame haunted by the previous press; the last frame's is the next press's ghost.
+      frames.push_back(
+          read_out(with_ghost(expected_counts(pose, settling_press), ghost), drift_step));
     }
     return frames;
   }
 
  private:
+  // Step 5, the hysteresis: `expected` plus `hysteresis` x the ghost of an earlier press;
+  // `expected` itself becomes the ghost the next frame sees (previous_). `ghost` may be
+  // previous_: it is read before previous_ is replaced.
+  [[nodiscard]] image<float> with_ghost(image<float> expected, const image<float>& ghost) {
+    if (!(params_.hysteresis > 0.0)) return expected;
+    image<float> haunted =
+        (expected.cast<double>() + params_.hysteresis * ghost.cast<double>()).cast<float>();
+    previous_ = std::move(expected);
+    return haunted;
+  }
+
   // Steps 5-6 after the hysteresis: soft saturation, the baseline's walk by `drift_step`, noise,
   // rounding, the full scale and dead taxels; numbers the frame.
   [[nodiscard]] tactile_frame read_out(image<float> expected, double drift_step) {
