@@ -153,6 +153,13 @@ void bind_simulation(py::module_& m) {
                      "Bursts: the first frame's fraction of the press depth (1 = no settling).")
       .def_readwrite("settle_frames", &simulator_params::settle_frames,
                      "Bursts: time constant of the settling, frames.")
+      .def_readwrite("bump_probability", &simulator_params::bump_probability,
+                     "Bursts: probability that a frame after the first is read during a bump "
+                     "(an outlier frame); 0 = none.")
+      .def_readwrite("bump_depth_spread", &simulator_params::bump_depth_spread,
+                     "A bump's force: the depth times a factor uniform in [1 - s, 1 + s].")
+      .def_readwrite("bump_shift_mm", &simulator_params::bump_shift_mm,
+                     "A bump's slide of the array, mm, in a random direction.")
       .def_readwrite("seed", &simulator_params::seed,
                      "Fixes gains, dead taxels and the noise stream.")
       .def_property(
@@ -165,11 +172,11 @@ void bind_simulation(py::module_& m) {
           },
           "Timestamp step between rendered frames, ns.");
   keyword_struct<simulator_params>(
-      sp,
-      {"geometry", "press_depth_mm", "supersample", "foam_sigma_mm", "gain_counts_per_mm",
-       "gain_variation", "noise_counts", "dead_fraction", "full_scale_counts", "saturation_counts",
-       "hysteresis", "baseline_drift_counts", "frames_per_press", "settle_start", "settle_frames",
-       "seed", "frame_interval_ns"},
+      sp, {"geometry",           "press_depth_mm",    "supersample",   "foam_sigma_mm",
+           "gain_counts_per_mm", "gain_variation",    "noise_counts",  "dead_fraction",
+           "full_scale_counts",  "saturation_counts", "hysteresis",    "baseline_drift_counts",
+           "frames_per_press",   "settle_start",      "settle_frames", "bump_probability",
+           "bump_depth_spread",  "bump_shift_mm",     "seed",          "frame_interval_ns"},
       "Configuration of the tactile simulator (C++ tacmap::simulator_params). The defaults "
       "describe the paper's Weiss array on a 4 mm relief: a 1 mm press gives about 2000 of "
       "4095 counts on a fully loaded cell, with a few percent of noise and gain spread.");

@@ -195,13 +195,32 @@ std::string ece_text(const std::vector<double>& p, const std::vector<char>& ok) 
   return buf;
 }
 
+// --burst-combine mean: every frame of a burst kept and averaged (no settling head or outlier
+// frames dropped), the reference the default combination is measured against.
+tacmap::burst_params plain_mean_burst() {
+  tacmap::burst_params b;
+  b.settle_tolerance = 1e9;
+  b.outlier_tolerance = 1e9;
+  b.statistic = tacmap::burst_statistic::trimmed_mean;
+  b.trim_fraction = 0.0;
+  return b;
+}
+bool is_plain_mean(const tacmap::burst_params& b) {
+  return b.statistic == tacmap::burst_statistic::trimmed_mean && b.trim_fraction == 0.0 &&
+         b.settle_tolerance >= 1e9;
+}
+
 // A configuration's name in the tables and the CSV: its filter's, and "/active" when its
-// touches are chosen by next_touch (--touch-order active).
+// touches are chosen by next_touch (--touch-order active), the frames per press of a burst
+// and "/mean" for bursts combined by their plain mean (--burst-combine mean).
 std::string config_label(const tacmap::localization_config& c) {
   return c.name() + (c.order == tacmap::touch_order::active ? "/active" : "") +
          (c.simulator.frames_per_press == 1
               ? std::string()
-              : "/frames " + std::to_string(c.simulator.frames_per_press));
+              : "/frames " + std::to_string(c.simulator.frames_per_press) +
+                    (is_plain_mean(c.burst)                                       ? "/mean"
+                     : c.burst.statistic == tacmap::burst_statistic::trimmed_mean ? "/trimmed"
+                                                                                  : ""));
 }
 
 // Second table: per configuration, over every map — the expected calibration error (points) of
@@ -355,6 +374,7 @@ std::string conditions_text(const char* scenario, const tacmap::simulator_params
   // A burst's settling (--frames-per-press > 1), where it is not the default.
   add(contact, "burst settle start", sim.settle_start, tacmap::simulator_params{}.settle_start);
   add(contact, "burst settle frames", sim.settle_frames, tacmap::simulator_params{}.settle_frames);
+  add(contact, "burst bumps", sim.bump_probability, 0.0);
   add(contact, "depth jitter", e.press_depth_jitter, 0.0);
   add(contact, "orientation jitter deg", e.orientation_jitter_deg, 0.0);
   add(contact, "tilt jitter deg", e.tilt_jitter_deg, 0.0);
@@ -441,6 +461,12 @@ int main(int argc, char** argv) try {
        "--frames-per-press > 1: time constant of the settling, frames",
        0.0,
        1000.0,
+       {}},
+      {"--bumps",
+       "--frames-per-press > 1: probability that a frame of a burst is read during a bump "
+       "(its force off by up to 60 %, the array slid by half a pitch)",
+       0.0,
+       1.0,
        {}},
   };
   std::vector<knob> lab_scenario_knobs{
@@ -645,6 +671,14 @@ int main(int argc, char** argv) try {
                  "list runs each (e.g. 1,5,20; the paper read 20)")
       ->delimiter(',')
       ->check(CLI::Range(1, 1000));
+  std::vector<std::string> burst_combine{"robust"};
+  app.add_option("--burst-combine", burst_combine,
+                 "how a burst (--frames-per-press > 1) becomes one frame: robust (the "
+                 "localizer's default: the settling head and outlier frames dropped, each "
+                 "taxel's median), trimmed (the same frames, each taxel's 20 % trimmed mean) or "
+                 "mean (every frame averaged: the reference); a comma-separated list runs each")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"robust", "trimmed", "mean"}));
   std::size_t active_candidates = 32;
   app.add_option("--active-candidates", active_candidates,
                  "--touch-order active: candidate positions drawn per touch")
@@ -842,6 +876,7 @@ int main(int argc, char** argv) try {
   set(lab_sensor_knobs[2], sim.hysteresis);
   set(lab_sensor_knobs[3], sim.settle_start);
   set(lab_sensor_knobs[4], sim.settle_frames);
+  set(lab_sensor_knobs[5], sim.bump_probability);
   double* const lab_fields[] = {
       &effects.shadow_depth,           &effects.shadow_edge_px,        &effects.defocus_px,
       &effects.map_scale_error,        &effects.light_press_fraction,  &effects.light_press_scale,
@@ -1113,13 +1148,18 @@ int main(int argc, char** argv) try {
     configs = std::move(expanded);
   }
 
-  // One copy of every configuration per --frames-per-press.
+  // One copy of every configuration per --frames-per-press and --burst-combine.
   {
     std::vector<tacmap::localization_config> expanded;
     for (const std::size_t n : frames_per_press)
-      for (auto c : configs) {
-        c.simulator.frames_per_press = n;
-        expanded.push_back(c);
+      for (const std::string& combine : burst_combine) {
+        if (n == 1 && combine != burst_combine.front()) continue;  // one frame: nothing to combine
+        for (auto c : configs) {
+          c.simulator.frames_per_press = n;
+          if (combine == "mean") c.burst = plain_mean_burst();
+          if (combine == "trimmed") c.burst.statistic = tacmap::burst_statistic::trimmed_mean;
+          expanded.push_back(c);
+        }
       }
     configs = std::move(expanded);
   }
@@ -1340,11 +1380,11 @@ int main(int argc, char** argv) try {
     if (config.simulator.frames_per_press == 1) continue;
     const auto it = bursts.find(config_label(config));
     if (it == bursts.end() || it->second.first == 0) continue;
-    std::printf(
-        "\n%s: %zu frames read per press, %.1f combined on average (the settling head "
-        "and outlier frames dropped)\n",
-        config_label(config).c_str(), config.simulator.frames_per_press,
-        static_cast<double>(it->second.second) / static_cast<double>(it->second.first));
+    std::printf("\n%s: %zu frames read per press, %.1f combined on average (%s)\n",
+                config_label(config).c_str(), config.simulator.frames_per_press,
+                static_cast<double>(it->second.second) / static_cast<double>(it->second.first),
+                is_plain_mean(config.burst) ? "every frame averaged"
+                                            : "the settling head and outlier frames dropped");
   }
   if (oracle_ceiling) print_ceilings(ceilings, configs);
   csv.close();

@@ -615,6 +615,16 @@ class TestSimulation(unittest.TestCase):
         self.assertLess(combined.used, 20)
         with self.assertRaisesRegex(ValueError, "frames_per_press = 0"):
             tacmap.Simulator(p.relief_mm(), p.mm_per_px, tacmap.SimulatorParams(frames_per_press=0))
+        # Bumps: outlier frames; the frames not bumped read as without them.
+        bumpy = tacmap.SimulatorParams(seed=9, frames_per_press=20, bump_probability=0.3)
+        self.assertEqual((bumpy.bump_depth_spread, bumpy.bump_shift_mm), (0.6, 1.7))
+        shaken = tacmap.Simulator(p.relief_mm(), p.mm_per_px, bumpy).render_press(x, y)
+        same = [np.array_equal(a.counts, b.counts) for a, b in zip(burst, shaken)]
+        self.assertTrue(same[0])
+        self.assertIn(False, same)
+        self.assertGreater(same.count(True), 5)
+        with self.assertRaisesRegex(ValueError, "bump_probability = 2"):
+            tacmap.Simulator(p.relief_mm(), p.mm_per_px, tacmap.SimulatorParams(bump_probability=2))
 
     def test_an_experiment_keeps_its_protocol_alive(self):
         protocol = tacmap.load_protocol(GECKO)

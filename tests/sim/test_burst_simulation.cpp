@@ -1,17 +1,21 @@
 // Tests of a press read as a burst of frames (`simulator_params::frames_per_press`,
 // `tactile_simulator::render_press`): one frame is exactly `render`, a burst's frames differ by
 // their own noise and settle towards the full press, the hysteresis ghost is the previous
-// press's and the baseline walks as far per press whatever the frames.
+// press's and the baseline walks as far per press whatever the frames; bumps make outlier frames
+// that leave the other frames as they were, and that combine_burst drops.
 #include <doctest/doctest.h>
 
 #include <cmath>
 #include <cstddef>
+#include <limits>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "sim_fixtures.hpp"
 #include "tacmap/sim/scenario.hpp"
 #include "tacmap/sim/tactile_simulator.hpp"
+#include "tacmap/tactile/burst.hpp"
 #include "test_support.hpp"
 
 namespace test_burst_simulation {
@@ -148,6 +152,93 @@ TEST_CASE("the baseline walks as far per press whatever the frames per press") {
   }
 }
 
+TEST_CASE("bumps: outlier frames of their own force, the other frames as without them") {
+  // With read-out noise, so that "as without them" is a strong claim: the bumped simulator's
+  // unbumped frames equal the unbumped simulator's frames bit for bit (the bumps draw from a
+  // stream of their own). On a flat relief a bump's slide changes nothing: a bumped frame
+  // reads 2000 x its force factor, in [1 - 0.6, 1 + 0.6].
+  simulator_params p = quiet();
+  p.noise_counts = 40.0;
+  p.frames_per_press = 20;
+  p.settle_start = 1.0;
+  simulator_params bumped = p;
+  bumped.bump_probability = 0.3;
+  tactile_simulator calm(flat_relief(), {120, 120}, px, p),
+      shaken(flat_relief(), {120, 120}, px, bumped);
+  std::size_t frames = 0, hits = 0;
+  for (int press = 0; press < 40; ++press) {
+    const map_pose at{40.0 + press, 60.0, 0.0};
+    const auto a = calm.render_press(at);
+    const auto b = shaken.render_press(at);
+    REQUIRE(b.size() == 20);
+    CHECK((a.front().counts == b.front().counts).all());  // the first frame is never bumped
+    for (std::size_t k = 1; k < b.size(); ++k) {
+      ++frames;
+      CHECK(b[k].sequence == a[k].sequence);
+      if ((a[k].counts == b[k].counts).all()) continue;
+      ++hits;
+      // The force: the frame's mean against the calm one's, the noise averaged over 84 taxels.
+      const double factor = total(b[k]) / total(a[k]);
+      CHECK(factor >= 0.4 - 0.01);
+      CHECK(factor <= 1.6 + 0.01);
+    }
+  }
+  // 760 frames at 0.3: 228 expected, standard deviation 12.6 (a factor within 1e-2 of 1 would
+  // hide a hit only under a bit-identical noise draw, which cannot happen here).
+  REQUIRE(frames == 760);
+  CHECK(hits > 190);
+  CHECK(hits < 266);
+}
+
+TEST_CASE("a bump slides the array over the surface, and never off the map") {
+  // Across the step of step_relief, force unchanged: a bumped frame sees the step elsewhere.
+  simulator_params p = quiet();
+  p.frames_per_press = 20;
+  p.settle_start = 1.0;
+  p.bump_probability = 1.0;
+  p.bump_depth_spread = 0.0;
+  p.bump_shift_mm = 4.0;
+  tactile_simulator sim(step_relief(), {120, 120}, px, p);
+  const map_pose across{68.0, 60.0, 0.0};  // the step at x = 68 mm, under the array
+  const auto burst = sim.render_press(across);
+  std::size_t moved = 0;
+  for (std::size_t k = 1; k < burst.size(); ++k)
+    moved += (burst[k].counts != burst.front().counts).any() ? 1U : 0U;
+  // Only a slide along y (the step's direction) leaves the reading alone: most frames moved.
+  CHECK(moved >= 12);
+  // At the map's edge a slide that would leave the map is not made: no refusal, every frame
+  // read where it can be.
+  const double half_width = 0.5 * 6 * 3.4;
+  CHECK_NOTHROW((void)sim.render_press({half_width, 60.0, 0.0}));
+}
+
+TEST_CASE("combine_burst drops the bumped frames whose force is off, keeping the press") {
+  // Quiet sensor, flat relief: the settled frames read exactly 2000 per taxel. Bumps of up to
+  // +-60 % force; combine_burst (outliers: totals more than 15 % from the settled level) drops
+  // the ones beyond that, and the per-taxel median of the rest is the calm press.
+  simulator_params p = quiet();
+  p.frames_per_press = 20;
+  p.settle_start = 1.0;
+  p.bump_probability = 0.25;
+  tactile_simulator sim(flat_relief(), {120, 120}, px, p);
+  std::size_t dropped = 0, strong = 0;
+  for (int press = 0; press < 10; ++press) {
+    const auto burst = sim.render_press({60.0, 60.0, 0.0});
+    const tacmap::combined_burst c = tacmap::combine_burst(std::span<const tactile_frame>(burst));
+    CHECK((c.frame.counts == 2000.0F).all());
+    for (std::size_t k = 0; k < burst.size(); ++k) {
+      const double off = std::abs(total(burst[k]) / (84 * 2000.0) - 1.0);
+      if (off > 0.16) {
+        ++strong;
+        CHECK(c.status[k] == tacmap::burst_frame_status::outlier);
+      }
+      dropped += c.status[k] == tacmap::burst_frame_status::outlier ? 1U : 0U;
+    }
+  }
+  CHECK(strong > 0);
+  CHECK(dropped >= strong);
+}
+
 TEST_CASE("frames per press and the settling are validated, naming the field") {
   simulator_params p;
   p.frames_per_press = 0;
@@ -158,6 +249,17 @@ TEST_CASE("frames per press and the settling are validated, naming the field") {
   p.settle_start = 0.5;
   p.settle_frames = -1.0;
   CHECK(message_of([&] { p.validate(); }).find("settle_frames = -1") != std::string::npos);
+  p.settle_frames = 2.0;
+  p.bump_probability = 1.5;
+  CHECK(message_of([&] { p.validate(); }).find("bump_probability = 1.5") != std::string::npos);
+  p.bump_probability = 0.1;
+  p.bump_depth_spread = -0.1;
+  CHECK(message_of([&] { p.validate(); }).find("bump_depth_spread = -0.1") != std::string::npos);
+  p.bump_depth_spread = 0.5;
+  p.bump_shift_mm = std::numeric_limits<double>::quiet_NaN();
+  CHECK(message_of([&] { p.validate(); }).find("bump_shift_mm = nan") != std::string::npos);
+  p.bump_shift_mm = 1.7;
+  CHECK_NOTHROW(p.validate());
 }
 
 }  // namespace test_burst_simulation

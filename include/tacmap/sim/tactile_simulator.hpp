@@ -41,6 +41,13 @@
 //     the baseline walks as far over a press's frames as over one frame (its step per frame is
 //     baseline_drift_counts / sqrt(N): drift follows time between presses, not read-outs). A
 //     single frame (N = 1) is read once the press has settled: exactly `render`.
+//  8. Bumps within a burst (`bump_probability` > 0, bursts only): each frame after the first is,
+//     with that probability, read while the arm is knocked or the hand twitches: the contact
+//     force jumps (the frame's depth is scaled by a factor drawn uniformly from
+//     [1 - bump_depth_spread, 1 + bump_depth_spread]) and the array slides by `bump_shift_mm`
+//     in a random direction of the map (not off it), for that frame only. These are the outlier
+//     frames a burst's combination must drop (`combine_burst`); their draws come from a stream of
+//     their own, so every other frame reads as without them.
 //
 // Frames: a frame is `geometry.rows` x `geometry.cols` counts; taxel (r, c) sits at offset
 // ((c - (cols - 1) / 2) pitch, (r - (rows - 1) / 2) pitch) from the sensor centre in the sensor's
@@ -63,6 +70,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -201,6 +209,14 @@ struct simulator_params {
   /// Time constant of the settling, frames: frame k of a burst is pressed to
   /// 1 - (1 - settle_start) exp(-k / settle_frames) of the depth. 0 = settled from frame 1 on.
   double settle_frames = 2.0;
+  /// Probability that a frame of a burst (after its first) is read during a bump (file comment,
+  /// step 8); 0 = none. Bursts only: a single frame is read once the press has settled.
+  double bump_probability = 0.0;
+  /// A bump's force: the frame's depth times a factor uniform in [1 - s, 1 + s], s in [0, 1].
+  double bump_depth_spread = 0.6;
+  /// A bump's slide of the array over the surface, mm, in a random direction (half the
+  /// paper's pitch by default).
+  double bump_shift_mm = 1.7;
   std::uint64_t seed = 1;  ///< fixes gains, dead taxels and the noise stream
   std::chrono::nanoseconds frame_interval = std::chrono::milliseconds(10);  ///< timestamp step
 
@@ -230,6 +246,17 @@ struct simulator_params {
                    "first frame (1 = no settling)");
     non_negative("settle_frames", settle_frames,
                  " frames (time constant of a burst's settling; 0 = settled after one frame)");
+    if (!(bump_probability >= 0.0 && bump_probability <= 1.0))
+      detail::fail("simulator_params: bump_probability = ", bump_probability,
+                   "; expected a probability in [0, 1] that a burst's frame is read during a "
+                   "bump (0 = none)");
+    if (!(bump_depth_spread >= 0.0 && bump_depth_spread <= 1.0))
+      detail::fail("simulator_params: bump_depth_spread = ", bump_depth_spread,
+                   "; expected a fraction in [0, 1]: a bump scales the depth by a factor in "
+                   "[1 - spread, 1 + spread]");
+    if (!(std::isfinite(bump_shift_mm) && bump_shift_mm >= 0.0 && bump_shift_mm <= 1000.0))
+      detail::fail("simulator_params: bump_shift_mm = ", bump_shift_mm,
+                   "; expected a slide of 0 .. 1000 mm (half a pitch, 1.7, by default)");
     if (!(hysteresis >= 0.0 && hysteresis < 1.0))
       detail::fail("simulator_params: hysteresis = ", hysteresis,
                    "; expected a fraction in [0, 1) of the previous frame that persists "
@@ -284,6 +311,7 @@ class tactile_simulator {
     sim_rng dead_rng(splitmix64(seeder));
     noise_rng_ = sim_rng(splitmix64(seeder));
     drift_rng_ = sim_rng(splitmix64(seeder));  // drawn after the others: they stay as they were
+    bump_rng_ = sim_rng(splitmix64(seeder));   // likewise
     baseline_ = image<float>::Zero(params_.geometry.rows, params_.geometry.cols);
     previous_ = image<float>::Zero(params_.geometry.rows, params_.geometry.cols);
 
@@ -419,9 +447,10 @@ class tactile_simulator {
   }
 
   /// One press read as `params().frames_per_press` frames (file comment, step 7): each with its
-  /// own noise, the first ones still settling; the hysteresis ghost is the previous press's and
-  /// the baseline walks as far over the burst as over one frame. With one frame per press,
-  /// exactly `{render(pose, press)}`. Advances the noise stream and the frame number.
+  /// own noise, the first ones still settling, some bumped (step 8, `bump_probability`); the
+  /// hysteresis ghost is the previous press's and the baseline walks as far over the burst as over
+  /// one frame. With one frame per press, exactly `{render(pose, press)}`. Advances the noise
+  /// stream and the frame number.
   [[nodiscard]] std::vector<tactile_frame> render_press(const map_pose& pose,
                                                         const press_variation& press = {}) {
     const std::size_t n = params_.frames_per_press;
@@ -434,9 +463,24 @@ class tactile_simulator {
     for (std::size_t k = 0; k < n; ++k) {
       press_variation settling_press = press;
       settling_press.depth_scale = press.depth_scale * settling(k, n);
+      map_pose at = pose;
+      // Step 8: three draws per frame after the first whether it is bumped or not, so that
+      // which frames are bumped does not change what a bump does.
+      if (k > 0 && params_.bump_probability > 0.0) {
+        const double hit = bump_rng_.uniform();
+        const double force = 1.0 + params_.bump_depth_spread * (2.0 * bump_rng_.uniform() - 1.0);
+        const double direction = 2.0 * std::numbers::pi * bump_rng_.uniform();
+        if (hit < params_.bump_probability) {
+          settling_press.depth_scale *= force;
+          map_pose slid = pose;
+          slid.x_mm += params_.bump_shift_mm * std::cos(direction);
+          slid.y_mm += params_.bump_shift_mm * std::sin(direction);
+          if (fits(slid)) at = slid;  // at the map's edge the array cannot slide off it
+        }
+      }
       // Every frame haunted by the previous press; the last frame's is the next press's ghost.
       frames.push_back(
-          read_out(with_ghost(expected_counts(pose, settling_press), ghost), drift_step));
+          read_out(with_ghost(expected_counts(at, settling_press), ghost), drift_step));
     }
     return frames;
   }
@@ -532,6 +576,7 @@ class tactile_simulator {
   image<bool> dead_;
   sim_rng noise_rng_;
   sim_rng drift_rng_;
+  sim_rng bump_rng_;
   image<float> baseline_;  // counts, the drifting zero of every taxel
   image<float> previous_;  // the previous frame's noiseless counts (hysteresis)
   std::uint32_t frames_ = 0;
