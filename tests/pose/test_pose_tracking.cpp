@@ -178,7 +178,11 @@ TEST_CASE_TEMPLATE("the rotated model's tracking hook writes its full log-likeli
       {"tempering 0.5, tau 0.3", {.tau = 0.3, .tempering = 0.5}},
       {"tempering 0 (flat)", {.tempering = 0.0}},
       {"spacing 4 (more patches)", {.spacing = 4}},
-      // The large-map rule forced on this small map: off-map means over a lattice sample.
+      // Off-map means exact (maps up to off_map_exact_positions; none by default), and over a
+      // sparser lattice than the default's.
+      {"exact off-map means, aligned", {.off_map_exact_positions = 1 << 20}},
+      {"exact off-map means, all pairs",
+       {.pairs = tacmap::pairing::all_pairs, .off_map_exact_positions = 1 << 20}},
       {"off-map means on a lattice, aligned",
        {.off_map_exact_positions = 0, .off_map_sample = 200}},
       {"off-map means on a lattice, all pairs",
@@ -195,27 +199,37 @@ TEST_CASE_TEMPLATE("the rotated model's tracking hook writes its full log-likeli
 }
 
 TEST_CASE("off-map means on a lattice: only poses with a patch off the map change, a little") {
-  // The large-map rule (more than off_map_exact_positions field positions) against the exact
-  // mean on the same map: the same values wherever every patch lands; near the edges, where a
-  // turned patch falls off, the lattice's mean estimates the exact one.
+  // The lattice rule (every map of more than off_map_exact_positions field positions: every map
+  // by default) against the exact mean on the same map: the same values wherever every patch
+  // lands; near the edges, where a turned patch falls off, the lattice's mean estimates the
+  // exact one. The default lattice (off_map_sample 512: every 3rd row and column, 256 of this map's
+  // 2,209 field positions) and a sparser one (every 4th, 144).
   const pose_grid_t grid = grid64(36);
   const tacmap::image<float> z = pose_test::render(map64(), 30.0, 27.0, 1.1, grid.window_size());
   using model_t = tacmap::rotated_descriptor_likelihood<tacmap::classic_sift>;
-  const model_t exact(tacmap::classic_sift{}, map64(), grid);
-  const model_t sampled(tacmap::classic_sift{}, map64(), grid,
-                        {.off_map_exact_positions = 0, .off_map_sample = 600});
+  const model_t exact(tacmap::classic_sift{}, map64(), grid, {.off_map_exact_positions = 1 << 20});
   Eigen::ArrayXf de(grid.size()), ds(grid.size());
   exact.distances(grid, z, de);
-  sampled.distances(grid, z, ds);
-  Eigen::Index changed = 0;
-  for (Eigen::Index i = 0; i < grid.size(); ++i) {
-    if (de(i) == ds(i)) continue;
-    ++changed;
-    // One patch's mean replaced by an estimate of it: within a few percent of the distance.
-    CHECK(std::abs(ds(i) - de(i)) <= 0.05F * de(i));
+  for (const Eigen::Index sample : {Eigen::Index{512}, Eigen::Index{200}}) {
+    CAPTURE(sample);
+    const model_t sampled(tacmap::classic_sift{}, map64(), grid,
+                          sample == 512
+                              ? tacmap::rotated_likelihood_params{}
+                              : tacmap::rotated_likelihood_params{.off_map_exact_positions = 0,
+                                                                  .off_map_sample = sample});
+    sampled.distances(grid, z, ds);
+    Eigen::Index changed = 0;
+    for (Eigen::Index i = 0; i < grid.size(); ++i) {
+      if (de(i) == ds(i)) continue;
+      ++changed;
+      // Only a pose with a patch off the map: one patch's mean replaced by an estimate of it,
+      // within a few percent of the distance.
+      CHECK(has_off_map_patch(sampled, grid, i));
+      CHECK(std::abs(ds(i) - de(i)) <= 0.05F * de(i));
+    }
+    CHECK(changed > 0);                // the rule ran
+    CHECK(changed < grid.size() / 2);  // ... only near the edges
   }
-  CHECK(changed > 0);                // the rule ran
-  CHECK(changed < grid.size() / 2);  // ... only near the edges
   // Bad parameters are refused, naming them.
   CHECK_THROWS_WITH_AS(model_t(tacmap::classic_sift{}, map64(), grid, {.off_map_sample = 0}),
                        doctest::Contains("off_map_sample = 0"), std::invalid_argument);
