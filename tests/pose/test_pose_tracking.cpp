@@ -315,6 +315,56 @@ TEST_CASE("a tracked pose filter equals its full update within the bound, same M
   CHECK(std::abs(e.map_mm(1) / grid.mm_per_px() - sensor.cy) <= 2.0);
 }
 
+TEST_CASE("the default pose filter tracks with a one-heading sample: the whole grid's belief") {
+  // The localizer's default (x, y, theta) filter (latent appearance: 72 layers; the robust
+  // motion's floor) with default_tracking(): each tracked touch evaluates the support and every
+  // 8th row of one heading of each appearance block (sample_layers), the next heading the next
+  // touch; the sampled rows span whole layer rows, so at turned headings they hold poses whose
+  // patches fall off the map (lattice means). Walked touch by touch beside the same filter
+  // untracked: the same MAP state, beliefs within the tracked path's error, and the estimated
+  // prediction support (from the sample, each sampled state standing for its share of the
+  // outside) near the whole grid's. A sample that stood for the wrong share would be off by
+  // log 36 nats.
+  walking_sensor sensor;
+  const pose_grid_t& grid = sensor.grid;
+  tacmap::localizer_config c;
+  c.headings = 36;
+  REQUIRE(c.tracking_headings);  // on by default
+  auto full = tacmap::make_pose_filter(c, map64(), grid.mm_per_px(), grid.window_size());
+  (void)full.update(sensor.touch());
+  (void)full.update(sensor.touch());
+  auto tracked = full;
+  tracked.set_tracking(tacmap::default_tracking());
+  int tracked_steps = 0;
+  for (int step = 0; step < 10; ++step) {
+    CAPTURE(step);
+    const tacmap::sensor_odometry u = sensor.walk(step, 0.5 * grid.angle_step_rad());
+    (void)tracked.predict(u);
+    (void)full.predict(u);
+    const auto z = sensor.touch();
+    const tacmap::update_report rt = tracked.update(z);
+    const tacmap::update_report rf = full.update(z);
+    CHECK(rf.path == update_path::full);
+    CHECK(tracked.estimate().map_index == full.estimate().map_index);
+    const double tv =
+        0.5 * (tracked.belief().cast<double>() - full.belief().cast<double>()).abs().sum();
+    CHECK(tv <= 1e-2);
+    if (rt.path != update_path::tracked) continue;
+    ++tracked_steps;
+    CHECK(rt.evaluated_states < grid.size() / 4);
+    CHECK(std::abs(rt.log_prediction_support - rf.log_prediction_support) <= 1.0);
+  }
+  CHECK(tracked_steps >= 5);
+  // The sampled headings after the first (heading 0, then 1, 2, ...) turn a patch off the map
+  // at the ends of every row: the sample met the lattice's means.
+  const tacmap::rotated_descriptor_likelihood<tacmap::classic_sift> model(tacmap::classic_sift{},
+                                                                          map64(), grid);
+  const Eigen::Index plane = grid.rows() * grid.cols();
+  for (Eigen::Index heading = 1; heading < 3; ++heading)
+    for (Eigen::Index row = 0; row < grid.rows(); row += 8)
+      CHECK(has_off_map_patch(model, grid, heading * plane + row * grid.cols()));
+}
+
 TEST_CASE("a tracked pose filter's windowed predicts stay within their bound of the whole grid's") {
   // One filter tracking touch after touch (predict right after a tracked update moves only the
   // support's box, in every heading layer), each prediction compared with the whole grid's
