@@ -250,9 +250,9 @@ struct localizer_config {
   /// Tracking (`bayes_filter::set_tracking`): once the belief is concentrated, a touch evaluates
   /// the likelihood only where the belief is and on a sample of every 8th row of the rest, and
   /// the whole grid when the touch doubts the prediction and every 64 touches
-  /// (`default_tracking()`, the default; `touch_result::path` says which a touch took). Known
-  /// heading only unless `tracking_headings`. Empty: every touch evaluates the whole grid (the
-  /// default before, and the paper's). Measured against empty in the same runs
+  /// (`default_tracking()`, the default; `touch_result::path` says which a touch took). With
+  /// headings too, unless `tracking_headings` is off. Empty: every touch evaluates the whole grid
+  /// (the default before, and the paper's). Measured against empty in the same runs
   /// (tacmap-evaluate --scenario realistic, the gecko and 8 photographs, seeds 1-3): without
   /// faults the same 573 of 594 localized, ECE 2.0 / 3.7 / 3.4 points against 2.0 / 3.7 / 3.3;
   /// 12 touches with a kidnap at touch 7, back within 3 touches 434 of 558 against 429 of 553,
@@ -262,14 +262,20 @@ struct localizer_config {
   /// quarter of the states (the first touches, a small map) takes the whole grid anyway: no grid
   /// size needs a rule of its own.
   std::optional<tracking_params> tracking = default_tracking();
-  /// Whether `tracking` applies to the (x, y, theta) filter (headings > 0) as well. Off by
-  /// default, measured: there a tracked touch cost what the whole grid costs (paper's grid, 36
-  /// headings, camera_bench CPU time: 13.5 against 13.1 ms), because the sample's rows reach
-  /// the map's edges, where the rotated model's patches that fall off the map need a pass over
-  /// every heading; without the sample (`sample_every` = 0) it is several times cheaper, but
-  /// slips then come back later (at known heading: 356 of 437 within 5 touches against 365 of
-  /// 432 untracked).
-  bool tracking_headings = false;
+  /// Whether `tracking` applies to the (x, y, theta) filter (headings > 0) as well. On by
+  /// default, measured (tacmap-evaluate --scenario realistic --headings 36, the gecko and 8
+  /// photographs, seeds 1-3, 594 sequences, against --no-tracking in the same runs): without
+  /// faults the same 539 of 594 localized, ECE 5.3 / 3.6 / 6.0 points against 5.2 / 3.6 / 5.9;
+  /// 12 touches with a kidnap at touch 7, back below 5 mm within 3 touches 378 of
+  /// 528 against 373 of 527, within 5 457 against 455; a 20 mm slip at touch 7, within
+  /// 3 235 of 406 against 218 of 401, within 5 310 against 305. A localized touch (camera_bench,
+  /// CPU-time medians, two interleaved rounds against the untracked default): paper's grid
+  /// 2.0-2.1 against 11.4-12.1 ms; 640 x 480 at 0.28 mm/px 4.2-4.3 against 15.4-15.9 ms. It pays
+  /// once the tracked sample holds one heading a touch
+  /// (`tracking_params::sample_layers`) and a patch turned off the map takes its mean over a
+  /// lattice (`rotated_likelihood_params::off_map_exact_positions`): before, a tracked touch
+  /// cost what the whole grid costs (13.5 against 13.1 ms on the paper's grid).
+  bool tracking_headings = true;
   /// The map as the sensor sees it: the standard deviation, mm, of a Gaussian by which the map
   /// is blurred before the measurement model describes it (0: the map as photographed). A touch
   /// is not a picture at the map's resolution: each taxel integrates the load over its cell and

@@ -494,9 +494,11 @@ TEST_CASE("localizer_config::tracking turns tracking off and on, and the two agr
     CHECK(b.probability_within == doctest::Approx(a.probability_within).epsilon(0.02));
     CHECK(b.verdict == a.verdict);
   }
-  // With unknown heading tracking applies only when asked for (tracking_headings): there the
-  // sample costs as much as the whole grid. Asked for, the rotated model's hook is reached.
+  // With unknown heading tracking applies by default too (tracking_headings), and can be turned
+  // off there alone; on, the rotated model's hook is reached.
   tracked_config.headings = 8;
+  CHECK(tacmap::localizer_config{}.tracking_headings);
+  tracked_config.tracking_headings = false;
   CHECK(tacmap::localizer(p.map, p.mm_per_px, tracked_config).pose_filter()->tracking().epsilon ==
         0.0);
   tracked_config.tracking_headings = true;

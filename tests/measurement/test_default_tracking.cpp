@@ -4,6 +4,7 @@
 // sensor after a kidnap. Every tracked result is compared with the full filter on the same inputs.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -126,6 +127,9 @@ TEST_CASE("the doubt's sample: every k-th row of every layer, outside the suppor
   CHECK(rows == std::vector<tacmap::state_range>{{4, 8}, {12, 16}});
   tacmap::detail::sample_rows(5, 4, 1, 0, 0, rows);
   CHECK(rows.empty());
+  // max_layers at or above the layers: the same rule.
+  tacmap::detail::sample_rows(5, 4, 2, 2, 1, rows, 2);
+  CHECK(rows == std::vector<tacmap::state_range>{{4, 8}, {12, 16}, {24, 28}, {32, 36}});
   // Less the support: ranges cut where the support overlaps them, kept whole elsewhere.
   const std::vector<tacmap::state_range> sample{{0, 10}, {20, 30}, {40, 50}};
   const std::vector<tacmap::state_range> support{{5, 7}, {9, 22}, {28, 31}, {60, 70}};
@@ -136,6 +140,46 @@ TEST_CASE("the doubt's sample: every k-th row of every layer, outside the suppor
   std::vector<tacmap::state_range> both;
   tacmap::detail::ranges_union(support, out, both);
   CHECK(both == std::vector<tacmap::state_range>{{0, 31}, {40, 50}, {60, 70}});
+}
+
+TEST_CASE("the doubt's sample over many layers: one heading of each block a touch, all in turn") {
+  // 36 headings x 2 appearance blocks of 7 rows x 5 columns, every 2nd row, at most 2 layers'
+  // worth: k = 36, so each touch samples layers c and c + 36 (heading c of both blocks), rows
+  // r = first (mod 2): the number of states 2 layers would give. The next touch takes the next
+  // heading; after 36 touches the next row. Over 72 touches every row of every layer is sampled
+  // exactly once.
+  const Eigen::Index rows = 7, cols = 5, layers = 72, every = 2;
+  std::vector<tacmap::state_range> sample;
+  std::vector<int> seen(static_cast<std::size_t>(layers * rows), 0);
+  for (Eigen::Index touch = 0; touch < 72; ++touch) {
+    CAPTURE(touch);
+    tacmap::detail::sample_rows(rows, cols, layers, every, touch, sample, 2);
+    const Eigen::Index heading = touch % 36, first = touch / 36;
+    std::vector<tacmap::state_range> want;
+    for (const Eigen::Index a : {heading, heading + 36})
+      for (Eigen::Index r = first; r < rows; r += every)
+        want.push_back({(a * rows + r) * cols, (a * rows + r + 1) * cols});
+    REQUIRE(sample == want);  // sorted, disjoint, whole rows
+    for (const tacmap::state_range& r : sample) ++seen[static_cast<std::size_t>(r.begin / cols)];
+  }
+  CHECK(std::all_of(seen.begin(), seen.end(), [](int n) { return n == 1; }));
+  // Offsets beyond k every (a long tracked run) and negative ones wrap.
+  std::vector<tacmap::state_range> again;
+  tacmap::detail::sample_rows(rows, cols, layers, every, 5, sample, 2);
+  tacmap::detail::sample_rows(rows, cols, layers, every, 5 + 72 * 1000, again, 2);
+  CHECK(sample == again);
+  tacmap::detail::sample_rows(rows, cols, layers, every, 5 - 72, again, 2);
+  CHECK(sample == again);
+  // Layers not a multiple of k: 5 layers at most 2 of them, k = 3: layers 1 and 4.
+  tacmap::detail::sample_rows(3, 2, 5, 1, 1, sample, 2);
+  CHECK(sample ==
+        std::vector<tacmap::state_range>{{6, 8}, {8, 10}, {10, 12}, {24, 26}, {26, 28}, {28, 30}});
+  // Bad sample_layers is refused, naming it.
+  tacmap::tracking_params bad = tacmap::default_tracking();
+  bad.sample_layers = -1;
+  CHECK_THROWS_WITH_AS(bad.validate(), doctest::Contains("sample_layers = -1"),
+                       std::invalid_argument);
+  CHECK(tacmap::default_tracking().sample_layers == 2);
 }
 
 TEST_CASE("the default motion's windowed predict moves a box as its whole-grid predict does") {

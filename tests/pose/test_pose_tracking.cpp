@@ -178,7 +178,11 @@ TEST_CASE_TEMPLATE("the rotated model's tracking hook writes its full log-likeli
       {"tempering 0.5, tau 0.3", {.tau = 0.3, .tempering = 0.5}},
       {"tempering 0 (flat)", {.tempering = 0.0}},
       {"spacing 4 (more patches)", {.spacing = 4}},
-      // The large-map rule forced on this small map: off-map means over a lattice sample.
+      // Off-map means exact (maps up to off_map_exact_positions; none by default), and over a
+      // sparser lattice than the default's.
+      {"exact off-map means, aligned", {.off_map_exact_positions = 1 << 20}},
+      {"exact off-map means, all pairs",
+       {.pairs = tacmap::pairing::all_pairs, .off_map_exact_positions = 1 << 20}},
       {"off-map means on a lattice, aligned",
        {.off_map_exact_positions = 0, .off_map_sample = 200}},
       {"off-map means on a lattice, all pairs",
@@ -195,27 +199,37 @@ TEST_CASE_TEMPLATE("the rotated model's tracking hook writes its full log-likeli
 }
 
 TEST_CASE("off-map means on a lattice: only poses with a patch off the map change, a little") {
-  // The large-map rule (more than off_map_exact_positions field positions) against the exact
-  // mean on the same map: the same values wherever every patch lands; near the edges, where a
-  // turned patch falls off, the lattice's mean estimates the exact one.
+  // The lattice rule (every map of more than off_map_exact_positions field positions: every map
+  // by default) against the exact mean on the same map: the same values wherever every patch
+  // lands; near the edges, where a turned patch falls off, the lattice's mean estimates the
+  // exact one. The default lattice (off_map_sample 512: every 3rd row and column, 256 of this map's
+  // 2,209 field positions) and a sparser one (every 4th, 144).
   const pose_grid_t grid = grid64(36);
   const tacmap::image<float> z = pose_test::render(map64(), 30.0, 27.0, 1.1, grid.window_size());
   using model_t = tacmap::rotated_descriptor_likelihood<tacmap::classic_sift>;
-  const model_t exact(tacmap::classic_sift{}, map64(), grid);
-  const model_t sampled(tacmap::classic_sift{}, map64(), grid,
-                        {.off_map_exact_positions = 0, .off_map_sample = 600});
+  const model_t exact(tacmap::classic_sift{}, map64(), grid, {.off_map_exact_positions = 1 << 20});
   Eigen::ArrayXf de(grid.size()), ds(grid.size());
   exact.distances(grid, z, de);
-  sampled.distances(grid, z, ds);
-  Eigen::Index changed = 0;
-  for (Eigen::Index i = 0; i < grid.size(); ++i) {
-    if (de(i) == ds(i)) continue;
-    ++changed;
-    // One patch's mean replaced by an estimate of it: within a few percent of the distance.
-    CHECK(std::abs(ds(i) - de(i)) <= 0.05F * de(i));
+  for (const Eigen::Index sample : {Eigen::Index{512}, Eigen::Index{200}}) {
+    CAPTURE(sample);
+    const model_t sampled(tacmap::classic_sift{}, map64(), grid,
+                          sample == 512
+                              ? tacmap::rotated_likelihood_params{}
+                              : tacmap::rotated_likelihood_params{.off_map_exact_positions = 0,
+                                                                  .off_map_sample = sample});
+    sampled.distances(grid, z, ds);
+    Eigen::Index changed = 0;
+    for (Eigen::Index i = 0; i < grid.size(); ++i) {
+      if (de(i) == ds(i)) continue;
+      ++changed;
+      // Only a pose with a patch off the map: one patch's mean replaced by an estimate of it,
+      // within a few percent of the distance.
+      CHECK(has_off_map_patch(sampled, grid, i));
+      CHECK(std::abs(ds(i) - de(i)) <= 0.05F * de(i));
+    }
+    CHECK(changed > 0);                // the rule ran
+    CHECK(changed < grid.size() / 2);  // ... only near the edges
   }
-  CHECK(changed > 0);                // the rule ran
-  CHECK(changed < grid.size() / 2);  // ... only near the edges
   // Bad parameters are refused, naming them.
   CHECK_THROWS_WITH_AS(model_t(tacmap::classic_sift{}, map64(), grid, {.off_map_sample = 0}),
                        doctest::Contains("off_map_sample = 0"), std::invalid_argument);
@@ -299,6 +313,56 @@ TEST_CASE("a tracked pose filter equals its full update within the bound, same M
   const auto e = full.estimate();
   CHECK(std::abs(e.map_mm(0) / grid.mm_per_px() - sensor.cx) <= 2.0);
   CHECK(std::abs(e.map_mm(1) / grid.mm_per_px() - sensor.cy) <= 2.0);
+}
+
+TEST_CASE("the default pose filter tracks with a one-heading sample: the whole grid's belief") {
+  // The localizer's default (x, y, theta) filter (latent appearance: 72 layers; the robust
+  // motion's floor) with default_tracking(): each tracked touch evaluates the support and every
+  // 8th row of one heading of each appearance block (sample_layers), the next heading the next
+  // touch; the sampled rows span whole layer rows, so at turned headings they hold poses whose
+  // patches fall off the map (lattice means). Walked touch by touch beside the same filter
+  // untracked: the same MAP state, beliefs within the tracked path's error, and the estimated
+  // prediction support (from the sample, each sampled state standing for its share of the
+  // outside) near the whole grid's. A sample that stood for the wrong share would be off by
+  // log 36 nats.
+  walking_sensor sensor;
+  const pose_grid_t& grid = sensor.grid;
+  tacmap::localizer_config c;
+  c.headings = 36;
+  REQUIRE(c.tracking_headings);  // on by default
+  auto full = tacmap::make_pose_filter(c, map64(), grid.mm_per_px(), grid.window_size());
+  (void)full.update(sensor.touch());
+  (void)full.update(sensor.touch());
+  auto tracked = full;
+  tracked.set_tracking(tacmap::default_tracking());
+  int tracked_steps = 0;
+  for (int step = 0; step < 10; ++step) {
+    CAPTURE(step);
+    const tacmap::sensor_odometry u = sensor.walk(step, 0.5 * grid.angle_step_rad());
+    (void)tracked.predict(u);
+    (void)full.predict(u);
+    const auto z = sensor.touch();
+    const tacmap::update_report rt = tracked.update(z);
+    const tacmap::update_report rf = full.update(z);
+    CHECK(rf.path == update_path::full);
+    CHECK(tracked.estimate().map_index == full.estimate().map_index);
+    const double tv =
+        0.5 * (tracked.belief().cast<double>() - full.belief().cast<double>()).abs().sum();
+    CHECK(tv <= 1e-2);
+    if (rt.path != update_path::tracked) continue;
+    ++tracked_steps;
+    CHECK(rt.evaluated_states < grid.size() / 4);
+    CHECK(std::abs(rt.log_prediction_support - rf.log_prediction_support) <= 1.0);
+  }
+  CHECK(tracked_steps >= 5);
+  // The sampled headings after the first (heading 0, then 1, 2, ...) turn a patch off the map
+  // at the ends of every row: the sample met the lattice's means.
+  const tacmap::rotated_descriptor_likelihood<tacmap::classic_sift> model(tacmap::classic_sift{},
+                                                                          map64(), grid);
+  const Eigen::Index plane = grid.rows() * grid.cols();
+  for (Eigen::Index heading = 1; heading < 3; ++heading)
+    for (Eigen::Index row = 0; row < grid.rows(); row += 8)
+      CHECK(has_off_map_patch(model, grid, heading * plane + row * grid.cols()));
 }
 
 TEST_CASE("a tracked pose filter's windowed predicts stay within their bound of the whole grid's") {

@@ -44,10 +44,16 @@ tacmap::pose_grid<float> grid64(int angles) {
                                  {.width = 18, .height = 42}),
       angles);
 }
+// The references below take a patch off the map's mean over every pose where it lands (the
+// definition); the models' default estimates it on a lattice (test_pose_tracking.cpp compares
+// the two), so they are built with exact means.
+constexpr tacmap::rotated_likelihood_params exact_means{.off_map_exact_positions = 1 << 20};
 // Models are built once per heading count (describing the map is the slow part in Debug).
 const rotated_descriptor_likelihood<sift_lite>& model64(int angles) {
-  static const rotated_descriptor_likelihood<sift_lite> m4(sift_lite{}, map64(), grid64(4));
-  static const rotated_descriptor_likelihood<sift_lite> m36(sift_lite{}, map64(), grid64(36));
+  static const rotated_descriptor_likelihood<sift_lite> m4(sift_lite{}, map64(), grid64(4),
+                                                           exact_means);
+  static const rotated_descriptor_likelihood<sift_lite> m36(sift_lite{}, map64(), grid64(36),
+                                                            exact_means);
   REQUIRE((angles == 4 || angles == 36));
   return angles == 4 ? m4 : m36;
 }
@@ -273,7 +279,8 @@ TEST_CASE("rotated likelihood: all pairs, the inverse shape and tempering") {
                                                      {.pairs = tacmap::pairing::all_pairs,
                                                       .shape = tacmap::likelihood_shape::inverse,
                                                       .epsilon = 0.01,
-                                                      .tempering = 0.5});
+                                                      .tempering = 0.5,
+                                                      .off_map_exact_positions = 1 << 20});
   const tacmap::pixel_size canvas = all.canvas_size();
   Eigen::ArrayXf ll(g.size());
   all.log_likelihood(g, z, ll);
@@ -405,7 +412,9 @@ TEST_CASE("rotated likelihood: a user's distance gives what the vectorised kerne
   const auto z = pose_test::render_state(map64(), g, g.index(2, {3, 40}));
   for (const auto pairs : {tacmap::pairing::aligned, tacmap::pairing::all_pairs}) {
     CAPTURE(static_cast<int>(pairs));
-    const rotated_descriptor_likelihood<sift_lite> fast(sift_lite{}, map64(), g, {.pairs = pairs});
+    // (A user's distance takes the exact off-map means: so does this one.)
+    const rotated_descriptor_likelihood<sift_lite> fast(
+        sift_lite{}, map64(), g, {.pairs = pairs, .off_map_exact_positions = 1 << 20});
     const rotated_descriptor_likelihood<sift_lite_generic> generic(sift_lite_generic{}, map64(), g,
                                                                    {.pairs = pairs});
     Eigen::ArrayXf a(g.size());

@@ -158,6 +158,18 @@ struct tracking_params {
   /// exact) instead of from the last whole-grid update's uniform evidence, which belongs to
   /// another touch. 0: no sample (the last whole-grid update's evidence).
   int sample_every = 0;
+  /// The sample holds at most this many layers' worth of rows (0: every `sample_every`-th row of
+  /// every layer). A grid with more layers (an (x, y, theta) grid's headings, times the
+  /// appearance hypotheses) samples every `sample_every`-th row of one layer in k,
+  /// k = ceil(layers / sample_layers), another each touch (`detail::sample_rows`); the sampled
+  /// states stand for the outside as before (each for its share). 2 (`default_tracking()`): a
+  /// known heading's two appearance blocks keep every 8th row of both; 36 headings sample one
+  /// heading of each block a touch, as many states as a known heading's sample. Every 8th row of
+  /// every heading cost as much as the whole grid (paper's grid, 36 headings, camera_bench:
+  /// 13.5 against 13.1 ms a touch); one row in 288 spread over every heading 2.2 ms (the touch
+  /// described at a dozen more headings); one heading 1.9 ms, and as many kidnaps and slips
+  /// recovered (`localizer_config::tracking_headings`).
+  int sample_layers = 0;
 
   void validate() const {
     if (!(std::isfinite(epsilon) && epsilon >= 0.0 && epsilon < 0.5))
@@ -180,6 +192,9 @@ struct tracking_params {
     if (sample_every < 0)
       detail::fail("tracking_params: sample_every = ", sample_every,
                    "; expected a row stride >= 0 (e.g. 8; 0 = no sample)");
+    if (sample_layers < 0)
+      detail::fail("tracking_params: sample_layers = ", sample_layers,
+                   "; expected a number of layers >= 0 (e.g. 2; 0 = every layer)");
   }
 };
 
@@ -204,12 +219,17 @@ class contradiction_error : public std::domain_error {
 /// 369 of 436; every 16th 368, every 32nd 362); and the whole grid every 64 tracked touches as a
 /// backstop against a kidnap both miss (12-touch sequences never reach it; every 16, the
 /// earlier choice, made the re-checks most of a localized touch's mean cost at 640 x 480).
+/// At most 2 layers' worth of sampled rows (`sample_layers`): a known heading's two appearance
+/// blocks whole, one heading of each a touch with headings.
+/// At most 2 layers' worth of sampled rows (`sample_layers`): a known heading's two appearance
+/// blocks whole, one heading of each a touch with headings.
 [[nodiscard]] constexpr tracking_params default_tracking() {
   tracking_params p;
   p.epsilon = 1e-9;
   p.recheck_every = 64;
   p.doubt = 3.0;
   p.sample_every = 8;
+  p.sample_layers = 2;
   return p;
 }
 
@@ -898,7 +918,8 @@ update_path filter_core<Grid, Motion>::tracked_update(double bound, evaluate_on 
     // once). The rows shift each tracked update, so that a narrow peak missed by one is met
     // by the next.
     detail::sample_rows(grid_.rows(), grid_.cols(), layers(), tracking_.sample_every,
-                        static_cast<Eigen::Index>(tracked_run_), sample_rows_);
+                        static_cast<Eigen::Index>(tracked_run_), sample_rows_,
+                        tracking_.sample_layers);
     detail::ranges_minus(std::span<const state_range>(sample_rows_), in, sample_out_);
     sampled = std::span<const state_range>(sample_out_);
     detail::ranges_union(in, sampled, evaluated_);

@@ -54,12 +54,20 @@ struct rotated_likelihood_params {
   double tau = 0.15;
   double tempering = descriptor_likelihood_params{}.tempering;
   /// A patch turned off the map counts its mean distance over the poses where it lands (file
-  /// comment). Maps of up to this many field positions (about 128 x 128 px) take that mean
-  /// exactly; larger ones over a fixed lattice of about `off_map_sample` field positions (every
-  /// s-th row and column), so that a tracked touch near the map's edge costs a few thousand
-  /// distances instead of a pass over the whole field.
-  Eigen::Index off_map_exact_positions = 16384;
-  Eigen::Index off_map_sample = 4096;  ///< positions of the lattice (about), >= 1
+  /// comment). Maps of up to this many field positions take that mean exactly; larger ones
+  /// over a fixed lattice of about `off_map_sample` field positions (every s-th row and
+  /// column), so that a tracked touch near the map's edge costs a few hundred distances per
+  /// patch instead of a pass over the whole field (a descriptor with its own distance always
+  /// takes the exact mean). 0 (the default): every map takes the lattice. Measured: exact means
+  /// up to 128 x 128 px made a tracked 36-heading touch on the paper's grid cost as much as
+  /// the whole grid (13.5 against 13.1 ms, camera_bench), since the tracked sample's rows reach
+  /// the edges of every heading. The lattice's mean is an estimate of the same uninformative
+  /// value, within a few percent of the exact one (test_pose_tracking.cpp); the
+  /// whole grid then adds the lattice's distances (about 3 % of an untracked touch there).
+  Eigen::Index off_map_exact_positions = 0;
+  /// Positions of the lattice (about), >= 1. 512: 441 of the paper's map's 10,609 positions;
+  /// each off-map patch of a tracked touch costs that many distances.
+  Eigen::Index off_map_sample = 512;
 
   void validate() const {
     if (off_map_exact_positions < 0 || off_map_sample < 1)
@@ -952,39 +960,70 @@ class rotated_descriptor_likelihood {
       }
     }
     // Each pose: 0, plus its patches' distances in the order add_band adds them (the band of
-    // the field position first, then the patch), then the off-map means in patch order.
+    // the field position first, then the patch), then the off-map means in patch order. Along
+    // a row segment that order changes only where a patch's field position crosses into the
+    // next band or the patch starts or stops landing on the map: between those columns every
+    // pose adds the same columns of field_buffer_ in the same order, done one whole run at a
+    // time (the same float additions per pose, so the same values; a per-pose sort of its terms
+    // was 9 % of a tracked touch at 36 headings).
     constexpr Eigen::Index band = band_tiles * width;
     struct term {
-      Eigen::Index band;
-      scalar_type value;
+      Eigen::Index band, m;
     };
     std::vector<term> terms;
     terms.reserve(m_size);
+    std::vector<Eigen::Index>& cuts = cuts_;
     scalar_type* layer = out.data() + a * rows_ * cols_;
-    for (const row_segment& s : rows)
-      for (Eigen::Index c = s.col_begin; c < s.col_end; ++c) {
+    for (const row_segment& s : rows) {
+      cuts.assign({s.col_begin, s.col_end});
+      const auto cut = [&](Eigen::Index c) {
+        if (c > s.col_begin && c < s.col_end) cuts.push_back(c);
+      };
+      for (Eigen::Index m = 0; m < m_count_; ++m) {
+        const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
+        if (s.row < r.first_row || s.row >= r.first_row + r.rows) continue;
+        cut(r.first_col);
+        cut(r.first_col + r.cols);
+        const grid_cell o = h.field_offset[static_cast<std::size_t>(m)];
+        const Eigen::Index p0 = (s.row + o.row) * fc + o.col;  // field position at column 0
+        for (Eigen::Index b = (p0 + s.col_begin) / band + 1; b * band - p0 < s.col_end; ++b)
+          cut(b * band - p0);
+      }
+      std::sort(cuts.begin(), cuts.end());
+      cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
+      scalar_type* row = layer + s.row * cols_;
+      for (std::size_t k = 0; k + 1 < cuts.size(); ++k) {
+        const Eigen::Index c0 = cuts[k], c1 = cuts[k + 1];
         terms.clear();
         for (Eigen::Index m = 0; m < m_count_; ++m) {
-          if (!lands(h, m, s.row, c)) continue;
+          if (!lands(h, m, s.row, c0)) continue;
           const grid_cell o = h.field_offset[static_cast<std::size_t>(m)];
-          const Eigen::Index p = (s.row + o.row) * fc + c + o.col;
-          const scalar_type* d = field_buffer_.data() + (summed ? 0 : m) * field_buffer_.rows();
-          terms.push_back({p / band, d[p]});
+          terms.push_back({((s.row + o.row) * fc + c0 + o.col) / band, m});
         }
-        // Stable, by band: an insertion sort of the few terms (std::stable_sort took a heap
-        // buffer per pose, 8 % of a tracked touch at 36 headings).
+        // Stable, by band: an insertion sort of the few terms.
         for (std::size_t i = 1; i < terms.size(); ++i)
           for (std::size_t j = i; j > 0 && terms[j - 1].band > terms[j].band; --j)
             std::swap(terms[j - 1], terms[j]);
-        scalar_type v = 0;
-        for (const term& t : terms) v += t.value;
+        if (terms.empty()) std::fill(row + c0, row + c1, scalar_type(0));
+        for (std::size_t i = 0; i < terms.size(); ++i) {
+          const Eigen::Index m = terms[i].m;
+          const grid_cell o = h.field_offset[static_cast<std::size_t>(m)];
+          const scalar_type* d = field_buffer_.data() + (summed ? 0 : m) * field_buffer_.rows() +
+                                 (s.row + o.row) * fc + o.col;
+          if (i == 0)
+            for (Eigen::Index c = c0; c < c1; ++c) row[c] = d[c];  // 0 + d: d
+          else
+            for (Eigen::Index c = c0; c < c1; ++c) row[c] += d[c];
+        }
         for (Eigen::Index m = 0; m < m_count_; ++m) {
           const patch_reach& r = h.reach[static_cast<std::size_t>(m)];
           if (r.rows <= 0 || r.cols <= 0) continue;  // never on the map: nothing added
-          if (!lands(h, m, s.row, c)) v += means_[static_cast<std::size_t>(a * m_count_ + m)];
+          if (lands(h, m, s.row, c0)) continue;
+          const scalar_type mean = means_[static_cast<std::size_t>(a * m_count_ + m)];
+          for (Eigen::Index c = c0; c < c1; ++c) row[c] += mean;
         }
-        layer[s.row * cols_ + c] = v;
       }
+    }
   }
 
   // The tactile image with its last column and row repeated once more ((H + 1) x (W + 1)):
@@ -1060,6 +1099,7 @@ class rotated_descriptor_likelihood {
   mutable std::vector<row_segment> segments_;
   mutable Eigen::Array<scalar_type, Eigen::Dynamic, Eigen::Dynamic> field_buffer_;
   mutable std::vector<scalar_type> row_scratch_;  // add_row's destination, discarded
+  mutable std::vector<Eigen::Index> cuts_;        // heading_on: one row segment's run limits
   mutable std::vector<scalar_type> norms_;        // the wanted descriptors' squared norms
   mutable std::vector<char> off_;                 // per a M + m: some requested pose off the map
   mutable std::vector<scalar_type> means_;        // per a M + m: its off-map mean (off_ only)

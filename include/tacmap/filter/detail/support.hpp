@@ -218,12 +218,32 @@ support_summary support_ranges_on(const T* p, std::span<const state_range> range
 /// Every `every`-th row of the belief image from row `offset` (mod `every`), in every one of its
 /// `layers`: whole rows, so that a model that streams tiles of a row pays for the sampled states
 /// only. Sorted, disjoint, into `out`.
+///
+/// `max_layers` > 0 caps the sample at that many layers' worth of rows: with more layers (the
+/// headings of an (x, y, theta) grid, times its appearance blocks) k = ceil(layers / max_layers)
+/// > 1, and the sample is every `every`-th row of the layers a = c (mod k) only: one heading of
+/// every appearance block, so that the model describes the touch at one more heading, not at
+/// all of them. Consecutive offsets take the next c; every k offsets, the next row. Every row
+/// of every layer is sampled once in k every touches. k = 1 is the rule above.
 inline void sample_rows(Eigen::Index rows, Eigen::Index cols, Eigen::Index layers,
-                        Eigen::Index every, Eigen::Index offset, std::vector<state_range>& out) {
+                        Eigen::Index every, Eigen::Index offset, std::vector<state_range>& out,
+                        Eigen::Index max_layers = 0) {
   out.clear();
-  if (every <= 0 || rows <= 0 || cols <= 0) return;
-  const Eigen::Index first = ((offset % every) + every) % every;
-  for (Eigen::Index a = 0; a < layers; ++a)
+  if (every <= 0 || rows <= 0 || cols <= 0 || layers <= 0) return;
+  const Eigen::Index k = max_layers > 0 ? (layers + max_layers - 1) / max_layers : 1;
+  if (k <= 1) {
+    const Eigen::Index first = ((offset % every) + every) % every;
+    for (Eigen::Index a = 0; a < layers; ++a)
+      for (Eigen::Index r = first; r < rows; r += every) {
+        const Eigen::Index begin = (a * rows + r) * cols;
+        out.push_back({begin, begin + cols});
+      }
+    return;
+  }
+  // Layers a = phase (mod k): one heading of every appearance block, the next touch the next.
+  const Eigen::Index o = ((offset % (k * every)) + k * every) % (k * every);
+  const Eigen::Index phase = o % k, first = o / k;
+  for (Eigen::Index a = phase; a < layers; a += k)
     for (Eigen::Index r = first; r < rows; r += every) {
       const Eigen::Index begin = (a * rows + r) * cols;
       out.push_back({begin, begin + cols});
