@@ -221,8 +221,6 @@ class contradiction_error : public std::domain_error {
 /// earlier choice, made the re-checks most of a localized touch's mean cost at 640 x 480).
 /// At most 2 layers' worth of sampled rows (`sample_layers`): a known heading's two appearance
 /// blocks whole, one heading of each a touch with headings.
-/// At most 2 layers' worth of sampled rows (`sample_layers`): a known heading's two appearance
-/// blocks whole, one heading of each a touch with headings.
 [[nodiscard]] constexpr tracking_params default_tracking() {
   tracking_params p;
   p.epsilon = 1e-9;

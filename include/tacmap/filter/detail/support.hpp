@@ -231,16 +231,8 @@ inline void sample_rows(Eigen::Index rows, Eigen::Index cols, Eigen::Index layer
   out.clear();
   if (every <= 0 || rows <= 0 || cols <= 0 || layers <= 0) return;
   const Eigen::Index k = max_layers > 0 ? (layers + max_layers - 1) / max_layers : 1;
-  if (k <= 1) {
-    const Eigen::Index first = ((offset % every) + every) % every;
-    for (Eigen::Index a = 0; a < layers; ++a)
-      for (Eigen::Index r = first; r < rows; r += every) {
-        const Eigen::Index begin = (a * rows + r) * cols;
-        out.push_back({begin, begin + cols});
-      }
-    return;
-  }
-  // Layers a = phase (mod k): one heading of every appearance block, the next touch the next.
+  // Layers a = phase (mod k): one heading of every appearance block, the next touch the next
+  // (k = 1: phase 0, every layer, the rows from offset mod every).
   const Eigen::Index o = ((offset % (k * every)) + k * every) % (k * every);
   const Eigen::Index phase = o % k, first = o / k;
   for (Eigen::Index a = phase; a < layers; a += k)
